@@ -1,0 +1,49 @@
+# Every target bootstraps .venv from the project's own files on first use.
+PY      ?= python3
+VENV    := .venv
+VPY     := $(VENV)/bin/python
+STAMP   := $(VENV)/.installed
+BENCH   := .venv-bench
+BSTAMP  := $(BENCH)/.installed
+PIP_FLAGS ?= --disable-pip-version-check -q
+
+export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
+export PYTHONDONTWRITEBYTECODE = 1
+
+.PHONY: venv test lint demo bench bench-venv regress clean
+
+venv: $(STAMP)
+
+$(STAMP): requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
+	test -x $(VPY) || $(PY) -m venv $(VENV)
+	$(VPY) -m pip install $(PIP_FLAGS) --upgrade pip
+	$(VPY) -m pip install $(PIP_FLAGS) -r requirements-dev.txt
+	$(VPY) -m pip install $(PIP_FLAGS) --no-deps -e .
+	touch $@
+
+bench-venv: $(BSTAMP)
+
+$(BSTAMP): requirements-bench.txt
+	test -x $(BENCH)/bin/python || $(PY) -m venv $(BENCH)
+	$(BENCH)/bin/python -m pip install $(PIP_FLAGS) -r requirements-bench.txt
+	touch $@
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+
+test: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VPY) -m pytest test -q -p no:cacheprovider
+
+regress: $(STAMP)
+	$(VENV)/bin/harness regress
+
+demo: $(STAMP)
+	$(VENV)/bin/demo --out out/demo
+
+bench: $(STAMP) $(BSTAMP)
+	$(VPY) benchmarks/core_speed.py
+	$(VPY) benchmarks/node_latency.py
+
+clean:
+	rm -rf $(VENV) $(BENCH) build install log out *.egg-info

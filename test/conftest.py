@@ -1,0 +1,102 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Shared fixtures: paths to ../shared, per-run DDS isolation, installed executables as processes."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED = REPO.parent / "shared"
+SEQUENCES = SHARED / "data" / "sequences"
+BIN = Path(sys.prefix) / "bin"
+
+# Keep DDS traffic on this host and apart from other runs (set before any rclpy import in a test).
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
+
+
+@pytest.fixture(scope="session")
+def shared_dir() -> Path:
+    assert SHARED.is_dir(), f"../shared not found next to the repository at {SHARED}"
+    return SHARED
+
+
+@pytest.fixture(scope="session")
+def sequences_dir(shared_dir: Path) -> Path:
+    return shared_dir / "data" / "sequences"
+
+
+def executable(name: str) -> str:
+    """Path of an installed console script (the venv's bin, as `ros2 run` would find lib/<pkg>/<name>)."""
+    path = BIN / name
+    assert path.exists(), f"console script {name!r} is not installed in {BIN}; run `make venv`"
+    return str(path)
+
+
+class ProcessSet:
+    """Starts installed executables and guarantees they are stopped (SIGINT, then SIGKILL)."""
+
+    def __init__(self, tmp: Path) -> None:
+        self.tmp = tmp
+        self.procs: list[tuple[subprocess.Popen, Path]] = []
+
+    def start(self, name: str, *args: str, env: dict[str, str] | None = None) -> subprocess.Popen:
+        log = self.tmp / f"{name}-{len(self.procs)}.log"
+        full_env = dict(os.environ)
+        full_env["PYTHONUNBUFFERED"] = "1"
+        if env:
+            full_env.update(env)
+        fh = log.open("wb")
+        proc = subprocess.Popen(
+            [executable(name), *args], stdout=fh, stderr=subprocess.STDOUT, env=full_env,
+            start_new_session=True,
+        )
+        self.procs.append((proc, log))
+        return proc
+
+    def log(self, proc: subprocess.Popen) -> str:
+        for p, log in self.procs:
+            if p is proc:
+                return log.read_text(errors="replace")
+        raise KeyError(proc)
+
+    def stop(self, proc: subprocess.Popen, sig: int = signal.SIGINT, timeout: float = 10.0) -> int:
+        if proc.poll() is None:
+            proc.send_signal(sig)
+            try:
+                proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(5)
+        return proc.returncode
+
+    def stop_all(self) -> None:
+        for proc, _ in reversed(self.procs):
+            self.stop(proc)
+
+
+@pytest.fixture
+def processes(tmp_path: Path) -> Iterator[ProcessSet]:
+    ps = ProcessSet(tmp_path)
+    try:
+        yield ps
+    finally:
+        ps.stop_all()
+
+
+def wait_for(predicate, timeout: float, interval: float = 0.05) -> bool:
+    """Poll predicate() until it is truthy or timeout seconds pass."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(interval)
+    return bool(predicate())
