@@ -1,0 +1,78 @@
+# SPDX-License-Identifier: Apache-2.0
+"""sensor_msgs/CameraInfo -> pinhole intrinsics, and the field-of-view fallback used without one."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from sensor_msgs.msg import CameraInfo
+
+from msg_adapters.errors import MessageError
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """Pinhole intrinsics in pixels for an image of `width` x `height` (K = [fx 0 cx; 0 fy cy; 0 0 1])."""
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    width: int
+    height: int
+
+    def scaled_to(self, width: int, height: int) -> Intrinsics:
+        """The same optics for an image resized to width x height (binning, decimation)."""
+        if (width, height) == (self.width, self.height):
+            return self
+        sx, sy = width / self.width, height / self.height
+        return Intrinsics(self.fx * sx, self.fy * sy, self.cx * sx, self.cy * sy, width, height)
+
+
+def intrinsics_from_fov(width: int, height: int, hfov_deg: float, vfov_deg: float = 0.0) -> Intrinsics:
+    """Intrinsics of an ideal pinhole with the given horizontal (and optional vertical) field of view.
+
+    fx = (width / 2) / tan(hfov / 2); fy likewise from vfov, or fy = fx (square pixels) when
+    vfov_deg <= 0. The principal point is the image centre (width / 2, height / 2) in the box
+    coordinates of `swir_tracker_ros.types.Box` (a box (0, 0, width, height) is centred on it).
+    """
+    if width <= 0 or height <= 0:
+        raise MessageError(f"image size must be positive for the FOV fallback, got {width}x{height}")
+    if not 0.0 < hfov_deg < 180.0:
+        raise MessageError(f"horizontal field of view must be in (0, 180) deg, got {hfov_deg}")
+    if vfov_deg >= 180.0 or not math.isfinite(vfov_deg):
+        raise MessageError(f"vertical field of view must be < 180 deg (<= 0: square pixels), got {vfov_deg}")
+    fx = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+    fy = (height / 2.0) / math.tan(math.radians(vfov_deg) / 2.0) if vfov_deg > 0 else fx
+    return Intrinsics(fx, fy, width / 2.0, height / 2.0, int(width), int(height))
+
+
+def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
+    """fx, fy, cx, cy from `CameraInfo.k`, corrected for `binning_x/y` and `roi` (REP-104).
+
+    Raises `MessageError` for an uncalibrated (all-zero) K, non-finite or non-positive focal lengths
+    or a zero image size.
+    """
+    try:
+        k = [float(v) for v in msg.k]
+        width, height = int(msg.width), int(msg.height)
+        bx, by = max(int(msg.binning_x), 1), max(int(msg.binning_y), 1)
+        roi_x, roi_y = int(msg.roi.x_offset), int(msg.roi.y_offset)
+        roi_w, roi_h = int(msg.roi.width), int(msg.roi.height)
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise MessageError(f"CameraInfo fields are not readable ({exc})") from exc
+    if len(k) != 9:
+        raise MessageError(f"CameraInfo.k must have 9 elements, got {len(k)}")
+    if width <= 0 or height <= 0:
+        raise MessageError(f"CameraInfo.width x height must be positive, got {width}x{height}")
+    fx, fy, cx, cy = k[0], k[4], k[2], k[5]
+    if not all(math.isfinite(v) for v in (fx, fy, cx, cy)) or fx <= 0 or fy <= 0:
+        raise MessageError(f"CameraInfo.k is uncalibrated or invalid: fx={fx}, fy={fy}, cx={cx}, cy={cy}")
+    # REP-104: the image is the ROI of the full sensor, then binned.
+    cx, cy = cx - roi_x, cy - roi_y
+    out_w = (roi_w if roi_w > 0 else width) // bx
+    out_h = (roi_h if roi_h > 0 else height) // by
+    if out_w <= 0 or out_h <= 0:
+        raise MessageError(f"CameraInfo roi/binning leave an empty image: {out_w}x{out_h}")
+    return Intrinsics(fx / bx, fy / by, cx / bx, cy / by, out_w, out_h)

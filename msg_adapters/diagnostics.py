@@ -1,0 +1,52 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Plain key/value health reports <-> diagnostic_msgs/DiagnosticArray (the /diagnostics topic)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from std_msgs.msg import Header
+
+from msg_adapters.errors import MessageError
+
+OK, WARN, ERROR, STALE = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR,
+                          DiagnosticStatus.STALE)
+
+
+def _text(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def status(name: str, level: int | bytes, message: str, values: Mapping[str, object],
+           hardware_id: str = "") -> DiagnosticStatus:
+    """One DiagnosticStatus; values are written as text (floats with 6 significant digits)."""
+    lvl = level if isinstance(level, bytes) else bytes([int(level)])
+    if lvl not in (OK, WARN, ERROR, STALE):
+        raise MessageError(f"DiagnosticStatus.level {level!r} is not OK, WARN, ERROR or STALE")
+    return DiagnosticStatus(level=lvl, name=name, message=message, hardware_id=hardware_id,
+                            values=[KeyValue(key=str(k), value=_text(v)) for k, v in values.items()])
+
+
+def diagnostic_array(header: Header, statuses: list[DiagnosticStatus]) -> DiagnosticArray:
+    return DiagnosticArray(header=header, status=list(statuses))
+
+
+def status_values(msg: DiagnosticArray, name: str) -> dict[str, str]:
+    """The values of the status called `name`; `MessageError` if the array has no such status."""
+    for st in getattr(msg, "status", []):
+        if st.name == name:
+            return {kv.key: kv.value for kv in st.values}
+    raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")
+
+
+def status_level(msg: DiagnosticArray, name: str) -> int:
+    """The level (0 OK .. 3 STALE) of the status called `name`."""
+    for st in getattr(msg, "status", []):
+        if st.name == name:
+            return st.level[0] if isinstance(st.level, bytes) else int(st.level)
+    raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")

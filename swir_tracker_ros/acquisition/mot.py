@@ -1,0 +1,234 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Multi-pedestrian tracking by detection with the life cycle of paper 004 Section 3.1 (Kalman track per target)."""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field, fields
+from enum import Enum
+
+import numpy as np
+
+from swir_tracker_ros.acquisition.association import CostWeights, Detection, assign, cost_matrix
+from swir_tracker_ros.acquisition.descriptors import Appearance, BaseWeights, describe, to_gray8
+from swir_tracker_ros.acquisition.motion import (
+    box_from_state,
+    box_model,
+    initial_covariance,
+    measurement,
+    state_from_box,
+)
+from swir_tracker_ros.acquisition.siamese import SiameseFamily
+from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.kalman.standard import predict, update
+from swir_tracker_ros.types import Box
+
+
+def _f(default: float | int | bool, doc: str, lo: float | None = None, hi: float | None = None):
+    meta: dict[str, object] = {"doc": doc}
+    if lo is not None:
+        meta["min"] = lo
+    if hi is not None:
+        meta["max"] = hi
+    return field(default=default, metadata=meta)
+
+
+@dataclass
+class MotParams:
+    """Association and life-cycle parameters (paper 004 values where it states them)."""
+
+    w1: float = _f(100.0, "weight of the whole-box Siamese distance alpha (eq. 7)", 0.0, 1e4)
+    w2: float = _f(25.0, "weight of the summed quadrant Siamese distances beta (eq. 7)", 0.0, 1e4)
+    w3: float = _f(300.0, "weight of the edge-LBP RMS distance tau (eq. 11)", 0.0, 1e5)
+    w_lbp: float = _f(20.0, "base: uniform-LBP histogram difference hL (eq. 1)", 0.0, 1e4)
+    w_mean: float = _f(20.0, "base: mean intensity difference (eq. 1)", 0.0, 1e4)
+    w_std: float = _f(10.0, "base: intensity standard deviation difference (eq. 1)", 0.0, 1e4)
+    w_height: float = _f(10.0, "base: relative height difference (eq. 1)", 0.0, 1e4)
+    w_width: float = _f(10.0, "base: relative width difference (eq. 1)", 0.0, 1e4)
+    w_score: float = _f(5.0, "base: 1 - detection score (eq. 1)", 0.0, 1e4)
+    w_overlap: float = _f(20.0, "base: 1 - IoU with the predicted box (eq. 1)", 0.0, 1e4)
+    w_dst: float = _f(20.0, "motion: distance to the prediction per box height (eq. 2)", 0.0, 1e4)
+    w_dev: float = _f(10.0, "motion: deviation from the motion pattern per box height (eq. 2)", 0.0, 1e4)
+    use_edge: bool = _f(True, "add the engineered edge-LBP score w3*tau")
+    use_siamese: bool = _f(True, "add the Siamese score gamma (needs the ONNX models)")
+    gate_chi2: float = _f(9.21, "Mahalanobis gate on the centre, chi^2 with 2 dof (0.99)", 0.1, 1e4)
+    max_cost: float = _f(1e6, "reject an assignment costing more than this", 0.0, 1e9)
+    confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits", 0, 100)
+    tentative_max_miss: int = _f(5, "a tentative track missed this many frames is deleted", 1, 100)
+    history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
+    drift_threshold: int = _f(15, "a drifting track missed this many more frames is deleted", 1, 1000)
+    history_len: int = _f(10, "positions kept for the motion pattern", 2, 100)
+    siamese_min_w: int = _f(19, "Siamese nets only for boxes at least this wide (px)", 1, 10000)
+    siamese_min_h: int = _f(50, "Siamese nets only for boxes at least this tall (px)", 1, 10000)
+    q_pos: float = _f(1.0, "process noise, acceleration variance (px/frame^2)^2", 0.0, 1e4)
+    q_size: float = _f(4.0, "process noise of the box size random walk (px^2)", 0.0, 1e4)
+    r_pos_rel: float = _f(0.08, "centre measurement std as a fraction of the box height", 1e-3, 1.0)
+    r_size_rel: float = _f(0.1, "size measurement std as a fraction of the box height", 1e-3, 1.0)
+    v0_rel: float = _f(0.15, "initial velocity std as a fraction of the box height per frame", 1e-3, 10.0)
+
+    def validate(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            lo, hi = f.metadata.get("min"), f.metadata.get("max")
+            if (lo is not None and v < lo) or (hi is not None and v > hi):
+                raise ParameterError(f"MotParams.{f.name} = {v!r} is outside [{lo}, {hi}]")
+
+    def cost_weights(self) -> CostWeights:
+        base = BaseWeights(self.w_lbp, self.w_mean, self.w_std, self.w_height, self.w_width, self.w_score,
+                           self.w_overlap)
+        return CostWeights(base, self.w1, self.w2, self.w3, self.w_dst, self.w_dev, self.use_edge,
+                           self.use_siamese, self.gate_chi2, self.max_cost)
+
+
+class TrackStatus(str, Enum):
+    TENTATIVE = "tentative"  # "unstable": not displayed
+    CONFIRMED = "confirmed"  # "stable": displayed, coasting while missed
+    DRIFTING = "drifting"  # kept and predicted, not displayed
+
+
+@dataclass
+class Track:
+    """One target: Kalman state over [cx, cy, w, h, vx, vy], last appearance, motion history, life cycle."""
+
+    id: int
+    x: np.ndarray
+    P: np.ndarray
+    R: np.ndarray
+    appearance: Appearance
+    history: deque
+    status: TrackStatus = TrackStatus.TENTATIVE
+    hits: int = 1
+    misses: int = 0
+    age: int = 1
+    matched: bool = True
+    last_box: Box = field(default_factory=lambda: Box(0, 0, 1, 1))
+
+    @property
+    def predicted(self) -> Box:
+        return box_from_state(self.x)
+
+    @property
+    def box(self) -> Box:
+        return box_from_state(self.x)
+
+    @property
+    def displayed(self) -> bool:
+        return self.status is TrackStatus.CONFIRMED
+
+
+class MultiTargetTracker:
+    """Tracking by detection (paper 004): predict, describe, gate, cost, Hungarian, update, life cycle."""
+
+    def __init__(self, params: MotParams | None = None, siamese: SiameseFamily | None = None) -> None:
+        self.params = params or MotParams()
+        self.params.validate()
+        if self.params.use_siamese and siamese is None:
+            siamese = SiameseFamily.load_default()
+        self.siamese = siamese if self.params.use_siamese else None
+        self.weights = self.params.cost_weights()
+        self.tracks: list[Track] = []
+        self.next_id = 1
+        self.frame_index = 0
+        self.last_timing_s = 0.0  # association time of the last frame (description + cost + assignment)
+
+    def reset(self) -> None:
+        self.tracks.clear()
+        self.next_id = 1
+        self.frame_index = 0
+
+    def _noise(self, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        p = self.params
+        return box_model(p.q_pos, p.q_size, p.r_pos_rel * h, p.r_size_rel * h)
+
+    def describe(self, gray: np.ndarray, dets: Sequence[Detection]) -> list[Detection]:
+        """Attach engineered features (and Siamese embeddings for large enough boxes) to detections."""
+        out = [Detection(d.box, d.score, describe(gray, d.box)) for d in dets]
+        if self.siamese is None:
+            return out
+        p = self.params
+        big = [k for k, d in enumerate(out) if d.box.w >= p.siamese_min_w and d.box.h >= p.siamese_min_h]
+        if big:
+            emb, parts = self.siamese.embed(gray, [out[k].box for k in big])
+            for n, k in enumerate(big):
+                a = out[k].appearance
+                assert a is not None
+                out[k] = Detection(out[k].box, out[k].score, Appearance(a.lbp, a.mean, a.std, a.edge,
+                                                                        emb[n], parts[n]))
+        return out
+
+    def step(self, frame: np.ndarray, detections: Sequence[Detection],
+             ego_shift: tuple[float, float] = (0.0, 0.0)) -> list[Track]:
+        """Process one frame; returns the displayed (confirmed, non-drifting) tracks.
+
+        ego_shift (px, +x right, +y down) is the image shift caused by head motion since the last frame and
+        is added to every prediction.
+        """
+        p = self.params
+        self.frame_index += 1
+        gray = to_gray8(frame)
+        h_img, w_img = gray.shape
+        dets = [d for d in detections if d.box.is_valid() and d.box.intersects_image(w_img, h_img)]
+        t0 = time.perf_counter()
+        for t in self.tracks:
+            F, Q, _, R = self._noise(float(t.x[3]))
+            t.x, t.P = predict(t.x, t.P, F, Q)
+            t.x[0] += ego_shift[0]
+            t.x[1] += ego_shift[1]
+            t.R = R
+            t.matched = False
+            t.age += 1
+        described = self.describe(gray, dets)
+        C = cost_matrix(self.tracks, described, self.weights)
+        matches, unmatched_tracks, unmatched_dets = assign(C, self.weights.max_cost)
+        self.last_timing_s = time.perf_counter() - t0
+        for i, j in matches:
+            self._update(self.tracks[i], described[j])
+        for i in unmatched_tracks:
+            self._miss(self.tracks[i])
+        for j in unmatched_dets:
+            self._spawn(described[j])
+        self.tracks = [t for t in self.tracks if t.status is not None and not self._dead(t)]
+        for t in self.tracks:
+            t.history.append((float(t.x[0]), float(t.x[1])))
+        return [t for t in self.tracks if t.displayed]
+
+    def _update(self, t: Track, d: Detection) -> None:
+        p = self.params
+        _, _, H, R = self._noise(d.box.h)
+        t.x, t.P = update(t.x, t.P, measurement(d.box), R, H)
+        assert d.appearance is not None
+        t.appearance = d.appearance  # template replaced by the last associated detection (Section 3.1)
+        t.last_box = d.box
+        t.hits += 1
+        t.misses = 0
+        t.matched = True
+        if t.status is TrackStatus.TENTATIVE and t.hits > p.confirm_hits:
+            t.status = TrackStatus.CONFIRMED
+        elif t.status is TrackStatus.DRIFTING:
+            t.status = TrackStatus.CONFIRMED
+
+    def _miss(self, t: Track) -> None:
+        p = self.params
+        t.misses += 1
+        if t.status is TrackStatus.CONFIRMED and t.misses >= p.history_threshold:
+            t.status = TrackStatus.DRIFTING
+
+    def _dead(self, t: Track) -> bool:
+        p = self.params
+        if t.status is TrackStatus.TENTATIVE:
+            return t.misses >= p.tentative_max_miss
+        if t.status is TrackStatus.DRIFTING:
+            return t.misses >= p.history_threshold + p.drift_threshold
+        return False
+
+    def _spawn(self, d: Detection) -> None:
+        p = self.params
+        assert d.appearance is not None
+        _, _, _, R = self._noise(d.box.h)
+        P0 = initial_covariance(d.box, p.r_pos_rel * d.box.h, p.r_size_rel * d.box.h, p.v0_rel * d.box.h)
+        hist: deque = deque(maxlen=p.history_len)
+        self.tracks.append(Track(self.next_id, state_from_box(d.box), P0, R, d.appearance, hist,
+                                 last_box=d.box))
+        self.next_id += 1

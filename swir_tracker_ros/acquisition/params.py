@@ -1,0 +1,76 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Flat parameters of the acquisition node (the association's own are MotParams, bound under `mot.`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+from swir_tracker_ros.acquisition.detectors import (
+    Detector,
+    HogParams,
+    HogPeopleDetector,
+    MotionDetector,
+    MotionParams,
+)
+from swir_tracker_ros.acquisition.handoff import AutoInitParams
+from swir_tracker_ros.errors import ParameterError
+
+DETECTORS = ("motion", "hog")
+
+
+def _f(default, doc: str, lo=None, hi=None, **extra):
+    meta: dict[str, object] = {"doc": doc, **extra}
+    if lo is not None:
+        meta["min"] = lo
+    if hi is not None:
+        meta["max"] = hi
+    return field(default=default, metadata=meta)
+
+
+@dataclass
+class AcquisitionParams:
+    """Topics, detector choice, hand-off behaviour and the detectors' settings."""
+
+    image_topic: str = _f("/camera/image_raw", "input sensor_msgs/Image topic", read_only=True)
+    joint_states_topic: str = _f("/positioner/joint_states", "head joint states for ego-motion", read_only=True)
+    detector: str = _f("motion", "detector: motion (background subtraction) or hog (OpenCV people)",
+                       choices=DETECTORS)
+    fov_h_deg: float = _f(8.0, "horizontal field of view (deg) for the ego-motion shift", 0.1, 179.0)
+    ego_motion_compensation: bool = _f(True, "compensate detector and predictions for the head's motion")
+    auto_handoff: bool = _f(False, "hand off a confirmed moving target by itself while the tracker is idle/lost")
+    candidates: int = _f(3, "tracks offered when the single-object tracker reports lost", 1, 50)
+    publish_debug: bool = _f(True, "publish /acquisition/debug_image (only with subscribers)")
+    motion_learning_rate: float = _f(0.02, "background model update rate", 1e-4, 1.0)
+    motion_threshold_sigma: float = _f(3.0, "foreground above this many background std", 0.5, 20.0)
+    motion_min_area: float = _f(150.0, "smallest contour box kept (px^2)", 0.0, 1e7)
+    motion_open_size: int = _f(3, "morphological opening kernel (px)", 1, 51)
+    motion_close_size: int = _f(9, "morphological closing kernel (px)", 1, 101)
+    hog_hit_threshold: float = _f(0.0, "HOG SVM hit threshold", -5.0, 5.0)
+    hog_upscale: float = _f(1.0, "resize factor before HOG (people under 128 px need > 1)", 0.25, 4.0)
+    auto_iou: float = _f(0.5, "automatic confirmation: IoU with the temporary track's prediction", 0.0, 1.0)
+    auto_updates: int = _f(5, "automatic confirmation: updates needed", 1, 100)
+    auto_window: int = _f(10, "automatic confirmation: frames allowed", 1, 1000)
+
+    def validate(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            lo, hi = f.metadata.get("min"), f.metadata.get("max")
+            if (lo is not None and v < lo) or (hi is not None and v > hi):
+                raise ParameterError(f"parameter {f.name} = {v!r} is outside [{lo}, {hi}]")
+        if self.detector not in DETECTORS:
+            raise ParameterError(f"parameter detector = {self.detector!r} is not one of {list(DETECTORS)}")
+        if self.auto_updates > self.auto_window:
+            raise ParameterError(f"parameter auto_updates = {self.auto_updates} exceeds auto_window "
+                                 f"= {self.auto_window}")
+
+    def make_detector(self) -> Detector:
+        if self.detector == "hog":
+            return HogPeopleDetector(HogParams(hit_threshold=self.hog_hit_threshold, upscale=self.hog_upscale))
+        return MotionDetector(MotionParams(learning_rate=self.motion_learning_rate,
+                                           threshold_sigma=self.motion_threshold_sigma,
+                                           min_area=self.motion_min_area, open_size=self.motion_open_size,
+                                           close_size=self.motion_close_size))
+
+    def auto_init(self) -> AutoInitParams:
+        return AutoInitParams(iou_threshold=self.auto_iou, required_updates=self.auto_updates,
+                              window=self.auto_window)

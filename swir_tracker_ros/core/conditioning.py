@@ -1,0 +1,124 @@
+# SPDX-License-Identifier: Apache-2.0
+"""SWIR frame conditioning: 8/16-bit to float, robust stretch, dead pixels, de-interlacing, downscale."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from swir_tracker_ros.errors import TrackerError
+
+
+class ConditioningError(TrackerError):
+    """A frame cannot be turned into a float image (wrong shape, dtype, non-finite values)."""
+
+
+@dataclass(frozen=True)
+class ConditioningConfig:
+    """How raw frames become the float32 [0, 1] gray image the filters see.
+
+    stretch: "auto" stretches 16-bit and float input by percentiles, passes 8-bit through (/255);
+    "always" also stretches 8-bit; "off" only divides by the full scale of the bit depth.
+    """
+
+    stretch: str = "auto"
+    low_percentile: float = 0.5
+    high_percentile: float = 99.5
+    stretch_smoothing: float = 0.8  # EMA weight of the previous stretch limits (0: per-frame limits)
+    dead_pixel_threshold: float = 0.0  # 0: off; else |x - median3x3| above this (in [0,1] units) is replaced
+    deinterlace: str = "off"  # "off", "even" (keep even rows), "odd" (keep odd rows)
+    downscale: float = 1.0  # frame resize factor applied before tracking (1.0: off)
+
+
+def to_gray(frame: np.ndarray) -> np.ndarray:
+    """2-D view of a frame: HxW as is, HxWx1 squeezed, HxWx3 BGR / HxWx4 BGRA converted to luma."""
+    if not isinstance(frame, np.ndarray):
+        raise ConditioningError(f"frame must be a numpy array, got {type(frame).__name__}")
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[:, :, 0]
+    if frame.ndim == 3 and frame.shape[2] in (3, 4):
+        if frame.dtype not in (np.uint8, np.uint16, np.float32):
+            frame = frame.astype(np.float32)
+        code = cv2.COLOR_BGR2GRAY if frame.shape[2] == 3 else cv2.COLOR_BGRA2GRAY
+        return cv2.cvtColor(np.ascontiguousarray(frame), code)
+    if frame.ndim != 2:
+        raise ConditioningError(f"frame must be HxW, HxWx1, HxWx3 or HxWx4, got shape {frame.shape}")
+    return frame
+
+
+def percentile_limits(gray: np.ndarray, low: float, high: float, max_samples: int = 40000) -> tuple[float, float]:
+    """Robust black/white levels from a regular subsample of the image (no allocation of the full sort)."""
+    step = max(1, int(np.sqrt(gray.size / max_samples)))
+    sample = gray[::step, ::step].ravel().astype(np.float32, copy=False)
+    lo, hi = np.percentile(sample, [low, high])
+    return float(lo), float(hi)
+
+
+def suppress_dead_pixels(img: np.ndarray, threshold: float) -> np.ndarray:
+    """Replace isolated outliers (salt and pepper, stuck pixels) by the 3x3 median where |x - med| > threshold."""
+    med = cv2.medianBlur(img, 3)
+    return np.where(np.abs(img - med) > threshold, med, img)
+
+
+def single_field(img: np.ndarray, field: str) -> np.ndarray:
+    """Keep one field of an interlaced frame and line-double it back to full height (same coordinates)."""
+    start = 0 if field == "even" else 1
+    half = img[start::2]
+    out = cv2.resize(half, (img.shape[1], half.shape[0] * 2), interpolation=cv2.INTER_LINEAR)
+    if out.shape[0] < img.shape[0]:
+        out = np.vstack([out, out[-1:]])
+    return out[: img.shape[0]]
+
+
+class FrameConditioner:
+    """Stateful (EMA of stretch limits) but deterministic frame conditioning; `reset()` clears the state."""
+
+    def __init__(self, config: ConditioningConfig) -> None:
+        self.config = config
+        self._limits: tuple[float, float] | None = None
+
+    def reset(self) -> None:
+        self._limits = None
+
+    def __call__(self, frame: np.ndarray, bit_depth: int | None = None) -> np.ndarray:
+        """Return a float32 image in [0, 1] (downscaled by `config.downscale`); ConditioningError if unusable."""
+        cfg = self.config
+        gray = to_gray(frame)
+        if gray.shape[0] < 8 or gray.shape[1] < 8:
+            raise ConditioningError(f"frame of {gray.shape[1]}x{gray.shape[0]} pixels is too small to track in")
+        dtype = gray.dtype
+        if dtype == np.bool_ or not (np.issubdtype(dtype, np.integer) or np.issubdtype(dtype, np.floating)):
+            raise ConditioningError(f"frame dtype {dtype} is not an integer or float image type")
+        if np.issubdtype(dtype, np.floating):
+            img = gray.astype(np.float32, copy=False)
+            if not np.isfinite(img).all():
+                raise ConditioningError("frame contains NaN or infinite pixels")
+            full_scale = 1.0 if float(img.max(initial=0.0)) <= 1.0 else None
+        else:
+            img = gray.astype(np.float32)
+            bits = bit_depth if bit_depth else (8 if dtype.itemsize == 1 else 8 * dtype.itemsize)
+            full_scale = float(2 ** min(int(bits), 32) - 1)
+        stretch = cfg.stretch == "always" or (cfg.stretch == "auto" and dtype != np.uint8)
+        if stretch or full_scale is None:
+            lo, hi = percentile_limits(img, cfg.low_percentile, cfg.high_percentile)
+            if self._limits is not None and cfg.stretch_smoothing > 0:
+                a = cfg.stretch_smoothing
+                lo = a * self._limits[0] + (1 - a) * lo
+                hi = a * self._limits[1] + (1 - a) * hi
+            self._limits = (lo, hi)
+            span = max(hi - lo, 1e-6 * max(abs(hi), 1.0), 1e-12)
+            img = (img - np.float32(lo)) * np.float32(1.0 / span)
+            np.clip(img, 0.0, 1.0, out=img)
+        else:
+            img *= np.float32(1.0 / full_scale)
+        if cfg.deinterlace in ("even", "odd"):
+            img = single_field(img, cfg.deinterlace)
+        if cfg.dead_pixel_threshold > 0:
+            img = suppress_dead_pixels(img, cfg.dead_pixel_threshold)
+        if cfg.downscale != 1.0:
+            h = max(8, round(img.shape[0] * cfg.downscale))
+            w = max(8, round(img.shape[1] * cfg.downscale))
+            img = cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA)
+        return np.ascontiguousarray(img, dtype=np.float32)

@@ -1,0 +1,95 @@
+# SPDX-License-Identifier: Apache-2.0
+"""FilterBank: one correlation filter (KCF or DCF-CA) with its template geometry, in image coordinates."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from swir_tracker_ros.core.confidence import analyse
+from swir_tracker_ros.core.dcf_ca import DCFCA, DCFCAParams, context_offsets
+from swir_tracker_ros.core.features import extract_features, feature_shape, sample_patches
+from swir_tracker_ros.core.kcf import KCF, KCFParams
+from swir_tracker_ros.core.params import TrackerParams
+from swir_tracker_ros.core.windows import search_window, template_size
+from swir_tracker_ros.types import Box
+
+
+@dataclass(frozen=True)
+class Detection:
+    """Peak of the response in one search window, mapped to image coordinates."""
+
+    cx: float
+    cy: float
+    peak: float
+    psr: float
+    apce: float
+    scale: float  # size factor of the window relative to the predicted size
+    window: Box
+
+
+class FilterBank:
+    """A correlation filter working on windows resampled to a fixed template (paper 000 Fig. 3).
+
+    Every search window, whatever its size in the image, is resized to the template size chosen on the
+    first frame (halved for large targets, KCF reference), so the filter always sees the same grid.
+    """
+
+    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+        self.kind = p.feature
+        self.cell = p.cell_size if p.feature == "hog" else 1
+        self.exclusion = p.psr_exclusion
+        self.model_scale = 0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
+        gray = p.feature == "gray"
+        if p.pipeline == "kcf":
+            self.padding = p.kcf_padding
+            kp = KCFParams(padding=p.kcf_padding, lambda_=p.kcf_lambda, kernel_sigma=p.kcf_kernel_sigma,
+                           interp_factor=p.kcf_interp_factor, output_sigma_factor=p.output_sigma_factor,
+                           feature=p.feature, cell_size=self.cell)
+            self.learning_rate = kp.interp_factor
+        else:
+            self.padding = p.dcf_padding
+            dp = DCFCAParams(padding=p.dcf_padding, lambda1=p.dcf_lambda1, lambda2=p.dcf_lambda2,
+                             interp_factor=p.dcf_interp_factor, output_sigma_factor=p.output_sigma_factor,
+                             feature=p.feature, cell_size=self.cell)
+            self.learning_rate = dp.interp_factor
+        self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale)
+        shape = feature_shape(self.kind, self.th, self.tw, self.cell)
+        target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+        if gray and p.pipeline == "kcf":
+            target_cells = math.sqrt(w * h) * self.model_scale
+        self.filter: KCF | DCFCA = (KCF(kp, shape, target_cells) if p.pipeline == "kcf"
+                                    else DCFCA(dp, shape, target_cells))
+
+    def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
+        """Windowed feature maps (N, C, rows, cols) of the image regions `windows`."""
+        return extract_features(sample_patches(img, windows, self.tw, self.th), self.kind, self.cell)
+
+    def initialise(self, img: np.ndarray, box: Box) -> None:
+        self.train(img, box, 1.0)
+
+    def train(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Learn from the window around `box` (DCF-CA: plus 4 context windows one target size away)."""
+        win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+        if isinstance(self.filter, DCFCA):
+            offs = context_offsets(box.w, box.h, self.filter.params.n_context)
+            feats = self.features(img, [win, *(win.shifted(dx, dy) for dx, dy in offs)])
+            self.filter.train(feats[0], feats[1:], rate)
+        else:
+            self.filter.train(self.features(img, [win])[0], rate)
+
+    def detect(self, img: np.ndarray, windows: Sequence[Box], scales: Sequence[float] | None = None,
+               ) -> list[Detection]:
+        """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
+        responses = self.filter.respond(self.features(img, windows))
+        scales = scales if scales is not None else [1.0] * len(windows)
+        out = []
+        for win, s, resp in zip(windows, scales, responses):  # one entry per window (<= 45), not per pixel
+            pk = analyse(resp, self.exclusion)
+            cx = win.cx + pk.col * self.cell * (win.w / self.tw)
+            cy = win.cy + pk.row * self.cell * (win.h / self.th)
+            out.append(Detection(cx, cy, pk.value, pk.psr, pk.apce, s, win))
+        return out

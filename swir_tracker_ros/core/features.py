@@ -1,0 +1,69 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Patch sampling (crop + resize in one warp) and the feature maps the correlation filters consume."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from swir_tracker_ros.core.fhog import fhog
+from swir_tracker_ros.types import Box
+
+FEATURE_KINDS = ("hog", "gray")
+
+
+def sample_patch(img: np.ndarray, box: Box, out_w: int, out_h: int) -> np.ndarray:
+    """Resample the image region `box` (may extend past the border) to out_h x out_w pixels.
+
+    One affine warp maps the box onto the output grid with bilinear interpolation and replicated
+    borders, so a crop partly outside the image is well defined and sub-pixel positions are kept.
+    """
+    sx = box.w / out_w
+    sy = box.h / out_h
+    # output pixel (u, v) centre samples source point (x + (u + 0.5) * sx - 0.5, ...)
+    M = np.array([[sx, 0.0, box.x + 0.5 * sx - 0.5], [0.0, sy, box.y + 0.5 * sy - 0.5]], dtype=np.float64)
+    interp = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+    if sx > 2.0 or sy > 2.0:  # strong shrink: pre-filter to limit aliasing
+        k = max(sx, sy)
+        blurred = cv2.GaussianBlur(img, (0, 0), sigmaX=0.5 * k, borderType=cv2.BORDER_REPLICATE)
+        return cv2.warpAffine(blurred, M, (out_w, out_h), flags=interp, borderMode=cv2.BORDER_REPLICATE)
+    return cv2.warpAffine(img, M, (out_w, out_h), flags=interp, borderMode=cv2.BORDER_REPLICATE)
+
+
+def sample_patches(img: np.ndarray, boxes: Sequence[Box], out_w: int, out_h: int) -> np.ndarray:
+    """Stack of `sample_patch` results, shape (N, out_h, out_w) float32."""
+    out = np.empty((len(boxes), out_h, out_w), dtype=np.float32)
+    for i, b in enumerate(boxes):  # one OpenCV call per window (N <= 9), never per pixel
+        out[i] = sample_patch(img, b, out_w, out_h)
+    return out
+
+
+@lru_cache(maxsize=16)
+def cosine_window(rows: int, cols: int) -> np.ndarray:
+    """Hann window (outer product of two periodic-free Hann vectors), float32 (rows, cols)."""
+    return np.outer(np.hanning(rows), np.hanning(cols)).astype(np.float32)
+
+
+def feature_shape(kind: str, patch_h: int, patch_w: int, cell: int) -> tuple[int, int, int]:
+    """(channels, rows, cols) of the feature map of a patch."""
+    if kind == "hog":
+        return (31, patch_h // cell, patch_w // cell)
+    return (1, patch_h, patch_w)
+
+
+def extract_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray:
+    """Feature maps (N, C, rows, cols) of patches (N, H, W) in [0, 1], multiplied by the cosine window.
+
+    `hog`: 31-channel FHOG with `cell`-pixel cells; `gray`: the intensity minus 0.5 (KCF raw pixels).
+    """
+    if kind == "hog":
+        feats = fhog(patches, cell)
+    elif kind == "gray":
+        feats = (patches - np.float32(0.5))[:, None, :, :]
+    else:
+        raise ValueError(f"unknown feature kind {kind!r}; expected one of {FEATURE_KINDS}")
+    win = cosine_window(feats.shape[2], feats.shape[3])
+    return feats * win

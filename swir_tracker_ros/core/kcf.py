@@ -1,0 +1,126 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Kernelized correlation filter (Henriques et al., TPAMI 2015; paper 000 eqs. 3-8) on real FFTs."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+import scipy.fft as sfft
+
+from swir_tracker_ros.errors import ParameterError
+
+
+def _check(name: str, value: float, lo: float, hi: float) -> None:
+    if not (lo <= value <= hi):
+        raise ParameterError(f"{name}={value!r} is outside [{lo}, {hi}]")
+
+
+@dataclass
+class KCFParams:
+    """Published KCF defaults for HOG features (`KCFParams.gray()` gives the raw-pixel set)."""
+
+    padding: float = field(default=1.5, metadata={"doc": "search window = (1 + padding) x target", "min": 0.5, "max": 4.0})
+    lambda_: float = field(default=1e-4, metadata={"doc": "ridge regularisation (eq. 1)", "min": 1e-8, "max": 1.0})
+    kernel_sigma: float = field(default=0.5, metadata={"doc": "Gaussian kernel bandwidth (eq. 7)", "min": 0.01, "max": 10.0})
+    interp_factor: float = field(default=0.02, metadata={"doc": "model learning rate", "min": 0.0, "max": 1.0})
+    output_sigma_factor: float = field(default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0})
+    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": ("hog", "gray")})
+    cell_size: int = field(default=4, metadata={"doc": "feature cell in pixels (1 for gray)", "min": 1, "max": 8})
+
+    @classmethod
+    def gray(cls) -> KCFParams:
+        """Raw-pixel KCF of the MATLAB reference: sigma 0.2, interpolation 0.075, cell 1."""
+        return cls(kernel_sigma=0.2, interp_factor=0.075, feature="gray", cell_size=1)
+
+    def validate(self) -> None:
+        _check("padding", self.padding, 0.5, 4.0)
+        _check("lambda_", self.lambda_, 1e-8, 1.0)
+        _check("kernel_sigma", self.kernel_sigma, 0.01, 10.0)
+        _check("interp_factor", self.interp_factor, 0.0, 1.0)
+        _check("output_sigma_factor", self.output_sigma_factor, 0.01, 1.0)
+        if self.feature not in ("hog", "gray"):
+            raise ParameterError(f"feature={self.feature!r} is not one of ('hog', 'gray')")
+        _check("cell_size", self.cell_size, 1, 8)
+
+
+@lru_cache(maxsize=16)
+def gaussian_label_spectrum(rows: int, cols: int, sigma: float) -> np.ndarray:
+    """rfft2 of the Gaussian regression target, peak 1 shifted to (0, 0) (KCF `gaussian_shaped_labels`)."""
+    r = np.arange(rows) - rows // 2
+    c = np.arange(cols) - cols // 2
+    y = np.exp(-0.5 / sigma**2 * (r[:, None] ** 2 + c[None, :] ** 2))
+    y = np.roll(y, (-(rows // 2), -(cols // 2)), axis=(0, 1))
+    return sfft.rfft2(y).astype(np.complex64)
+
+
+def rfft2(x: np.ndarray) -> np.ndarray:
+    """Real 2-D FFT over the last two axes (unnormalised forward, as MATLAB fft2)."""
+    return sfft.rfft2(x, axes=(-2, -1), workers=1)
+
+
+def irfft2(xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    return sfft.irfft2(xf, s=shape, axes=(-2, -1), workers=1)
+
+
+def gaussian_correlation(zf: np.ndarray, zz: np.ndarray, xf: np.ndarray, xx: float, sigma: float,
+                         shape: tuple[int, int]) -> np.ndarray:
+    """Spectrum of the Gaussian kernel correlation k^{xz} for a batch (paper 000 eq. 7).
+
+    zf: (N, C, rows, cols//2+1) spectra, zz: (N,) squared norms, xf: (C, rows, cols//2+1) model
+    spectrum with squared norm xx. Returns (N, rows, cols//2+1).
+    """
+    numel = zf.shape[1] * shape[0] * shape[1]
+    xy = irfft2(np.einsum("nchw,chw->nhw", zf, np.conj(xf)), shape)
+    d = np.maximum(0.0, (zz[:, None, None] + xx - 2.0 * xy) / numel)
+    return rfft2(np.exp(-d / sigma**2))
+
+
+def linear_correlation(zf: np.ndarray, xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Spectrum of the linear kernel correlation, sum over channels of zf * conj(xf) / numel."""
+    numel = zf.shape[-3] * shape[0] * shape[1]
+    return np.einsum("...chw,chw->...hw", zf, np.conj(xf)) / numel
+
+
+class KCF:
+    """One KCF model over feature maps of fixed shape (C, rows, cols).
+
+    `train(x, rate)` learns alpha (eq. 6) from a windowed feature map and blends the model with
+    learning rate `rate` (1.0 on the first frame); `respond(z)` returns the responses (eq. 8) of a
+    batch of feature maps (N, C, rows, cols) as (N, rows, cols).
+    """
+
+    def __init__(self, params: KCFParams, feat_shape: tuple[int, int, int], target_cells: float) -> None:
+        self.params = params
+        self.shape = (feat_shape[1], feat_shape[2])
+        sigma = max(target_cells * params.output_sigma_factor, 0.25)
+        self.yf = gaussian_label_spectrum(self.shape[0], self.shape[1], float(sigma))
+        self.model_x: np.ndarray | None = None
+        self.model_xf: np.ndarray | None = None
+        self.model_alphaf: np.ndarray | None = None
+
+    @property
+    def trained(self) -> bool:
+        return self.model_alphaf is not None
+
+    def train(self, x: np.ndarray, rate: float) -> None:
+        xf = rfft2(x)
+        xx = np.array([float(np.vdot(x, x))])
+        kf = gaussian_correlation(xf[None], xx, xf, float(xx[0]), self.params.kernel_sigma, self.shape)[0]
+        alphaf = self.yf / (kf + self.params.lambda_)  # eq. 6
+        if self.model_alphaf is None or rate >= 1.0:
+            self.model_x, self.model_xf, self.model_alphaf = x.copy(), xf, alphaf
+        else:
+            self.model_x = (1.0 - rate) * self.model_x + rate * x
+            self.model_xf = (1.0 - rate) * self.model_xf + rate * xf
+            self.model_alphaf = (1.0 - rate) * self.model_alphaf + rate * alphaf
+
+    def respond(self, z: np.ndarray) -> np.ndarray:
+        if self.model_alphaf is None:
+            raise RuntimeError("KCF.respond called before train")
+        zf = rfft2(z)
+        zz = np.einsum("nchw,nchw->n", z, z)
+        xx = float(np.vdot(self.model_x, self.model_x))
+        kzf = gaussian_correlation(zf, zz, self.model_xf, xx, self.params.kernel_sigma, self.shape)
+        return irfft2(self.model_alphaf[None] * kzf, self.shape)  # eq. 8

@@ -1,0 +1,208 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Scores of one closed-loop run from its records: time in view, centring error, occlusions, rate, latency."""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from swir_tracker_ros.demo.recording import RunRecords
+
+OCCLUDED_BELOW = 0.5  # an occlusion episode: less than half of the target visible ...
+MIN_EPISODE_S = 0.2  # ... for at least this long (shorter dips are merged into neighbours or ignored)
+RECOVERY_S = 1.0  # survived: on target within this long after the target is visible again
+ON_TARGET_PX = 20.0  # on target: track centre within max(this, half the target width) of the truth
+
+
+@dataclass(frozen=True)
+class Series:
+    """Per-frame series of the running scene, aligned on the camera frames (one row per frame)."""
+
+    t: np.ndarray  # scene time, s
+    stamp: np.ndarray  # frame header stamp, s
+    pan_error: np.ndarray  # true angle of the target centre from the optical axis, rad (REP-103)
+    tilt_error: np.ndarray
+    visible: np.ndarray  # visible fraction of the target
+    centre_in_view: np.ndarray  # bool: the target's centre is inside the image
+    gt: list  # Box-like [x, y, w, h] or None per frame
+    track: list  # [x, y, w, h] or None: the tracker's box for that frame (None: no output for it)
+    state: list  # tracker state string for that frame ("" when none arrived)
+
+
+@dataclass(frozen=True)
+class Episode:
+    """One occlusion of the target: scene-time interval and whether the track survived it."""
+
+    start: float
+    end: float
+    min_visible: float
+    survived: bool
+
+
+@dataclass
+class RunSummary:
+    """The figures the report prints for one run (angles in degrees, times in seconds)."""
+
+    label: str
+    ego_motion_compensation: bool
+    outcome: str
+    duration_s: float
+    frames: int
+    time_in_view_s: float
+    in_view_fraction: float
+    in_view_at_end: bool
+    centring_error_mean_deg: float
+    centring_error_p95_deg: float
+    centring_error_mean_px: float
+    centring_error_p95_px: float
+    track_centre_error_mean_px: float
+    precision_20px: float
+    occlusions: int
+    occlusions_survived: int
+    camera_fps: float
+    tracker_fps: float
+    latency_p50_ms: float
+    latency_p95_ms: float
+    lost_frames: int
+    final_state: str
+    initial_offset_deg: list[float] = field(default_factory=list)  # target pan/tilt from the axis at start
+    head_travel_deg: list[float] = field(default_factory=list)  # pan/tilt turned between start and end
+    episodes: list[dict] = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _nearest(stamps: np.ndarray, values: list, query: np.ndarray, tol: float = 1e-4) -> list:
+    """values[i] for the stamp equal (within tol) to each query stamp, else None."""
+    if len(stamps) == 0:
+        return [None] * len(query)
+    order = np.argsort(stamps)
+    s = stamps[order]
+    idx = np.clip(np.searchsorted(s, query), 0, len(s) - 1)
+    out = []
+    for q, i in zip(query, idx):
+        best = min((j for j in (i - 1, i) if 0 <= j < len(s)), key=lambda j: abs(s[j] - q))
+        out.append(values[order[best]] if abs(s[best] - q) <= tol else None)
+    return out
+
+
+def series(rec: RunRecords) -> Series:
+    """Align ground truth, tracker boxes and states on the frames rendered while the scene clock ran."""
+    truth = np.array(rec.truth, dtype=np.float64).reshape(-1, 8)
+    running = truth[:, 1] > 0.0 if len(truth) else np.zeros(0, bool)
+    truth = truth[running]
+    stamps = truth[:, 0]
+    cam = rec.camera or {"width": 576, "height": 504, "fx": 1.0, "fy": 1.0}
+    pan_e, tilt_e = truth[:, 4], truth[:, 5]
+    with np.errstate(invalid="ignore"):
+        centre_in = ((cam["fx"] * np.tan(np.abs(pan_e)) < cam["width"] / 2.0)
+                     & (cam["fy"] * np.tan(np.abs(tilt_e)) < cam["height"] / 2.0))
+    gt_stamps = np.array([g[0] for g in rec.gt], dtype=np.float64)
+    tr_stamps = np.array([r[0] for r in rec.track], dtype=np.float64)
+    st_stamps = np.array([r[0] for r in rec.state], dtype=np.float64)
+    states = [s or "" for s in _nearest(st_stamps, [r[2] for r in rec.state], stamps)]
+    return Series(truth[:, 1], stamps, pan_e, tilt_e, truth[:, 3], centre_in,
+                  _nearest(gt_stamps, [g[1] for g in rec.gt], stamps),
+                  _nearest(tr_stamps, [r[2] for r in rec.track], stamps), states)
+
+
+def _on_target(gt: list | None, track: list | None) -> bool:
+    if gt is None or track is None:
+        return False
+    d = math.hypot(gt[0] + gt[2] / 2 - track[0] - track[2] / 2, gt[1] + gt[3] / 2 - track[1] - track[3] / 2)
+    return d <= max(ON_TARGET_PX, 0.5 * gt[2])
+
+
+def occlusion_episodes(s: Series) -> list[Episode]:
+    """Runs of frames with visible < OCCLUDED_BELOW lasting MIN_EPISODE_S or more (gaps shorter merged).
+
+    Survived: within RECOVERY_S after the target is visible again, the tracker reports `tracking` on a box
+    whose centre is on the target (see `ON_TARGET_PX`).
+    """
+    hidden = (s.visible < OCCLUDED_BELOW) & s.centre_in_view
+    runs: list[list[int]] = []
+    for i in np.flatnonzero(hidden):
+        if runs and s.t[i] - s.t[runs[-1][1]] <= MIN_EPISODE_S:
+            runs[-1][1] = int(i)
+        else:
+            runs.append([int(i), int(i)])
+    episodes = []
+    for a, b in runs:
+        if s.t[b] - s.t[a] < MIN_EPISODE_S:
+            continue
+        after = [k for k in range(b + 1, len(s.t)) if s.t[k] <= s.t[b] + RECOVERY_S]
+        survived = any(s.state[k] == "tracking" and _on_target(s.gt[k], s.track[k]) for k in after)
+        if not after:  # hidden until the end of the run: judge on the last frames instead
+            survived = s.state[b] in ("tracking", "occluded")
+        episodes.append(Episode(float(s.t[a]), float(s.t[b]), float(s.visible[a:b + 1].min()), survived))
+    return episodes
+
+
+def _stat(values: np.ndarray, q: float | None = None) -> float:
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return math.nan
+    return float(np.mean(values) if q is None else np.percentile(values, q))
+
+
+def summarise(rec: RunRecords) -> RunSummary:
+    s = series(rec)
+    cam = rec.camera or {"fx": math.nan, "fy": math.nan}
+    n = len(s.t)
+    dt = np.diff(s.t, append=s.t[-1] + (s.t[-1] - s.t[-2] if n > 1 else 0.0)) if n else np.zeros(0)
+    err = np.hypot(s.pan_error, s.tilt_error)
+    err_px = np.hypot(cam["fx"] * np.tan(s.pan_error), cam["fy"] * np.tan(s.tilt_error))
+    track_err = np.array([
+        math.hypot(g[0] + g[2] / 2 - tr[0] - tr[2] / 2, g[1] + g[3] / 2 - tr[1] - tr[3] / 2)
+        if g is not None and tr is not None else math.nan for g, tr in zip(s.gt, s.track)])
+    pairs = np.isfinite(track_err)
+    episodes = occlusion_episodes(s)
+    t0, t1 = (s.stamp[0], s.stamp[-1]) if n else (0.0, 0.0)
+    span = max(t1 - t0, 1e-9)
+    frames_in = [r for r in rec.frames if t0 <= r[0] <= t1]
+    outputs = [r for r in rec.error if t0 <= r[0] <= t1]
+    latency = np.array([(r[1] - r[0]) * 1e3 for r in outputs])
+    joints = np.array([[r[0], r[2], r[3]] for r in rec.joints]) if rec.joints else np.zeros((0, 3))
+    travel = [0.0, 0.0]
+    if len(joints) and n:
+        start = joints[np.argmin(np.abs(joints[:, 0] - t0))]
+        end = joints[np.argmin(np.abs(joints[:, 0] - t1))]
+        travel = [math.degrees(end[1] - start[1]), math.degrees(end[2] - start[2])]
+    return RunSummary(
+        label=rec.label, ego_motion_compensation=rec.ego_motion_compensation, outcome=rec.outcome,
+        duration_s=float(s.t[-1]) if n else 0.0, frames=n,
+        time_in_view_s=float(np.sum(dt[s.centre_in_view])) if n else 0.0,
+        in_view_fraction=float(np.mean(s.centre_in_view)) if n else 0.0,
+        in_view_at_end=bool(n and s.centre_in_view[-1]),
+        centring_error_mean_deg=math.degrees(_stat(err)), centring_error_p95_deg=math.degrees(_stat(err, 95)),
+        centring_error_mean_px=_stat(err_px), centring_error_p95_px=_stat(err_px, 95),
+        track_centre_error_mean_px=_stat(track_err),
+        precision_20px=float(np.mean(track_err[pairs] <= 20.0)) if pairs.any() else 0.0,
+        occlusions=len(episodes), occlusions_survived=sum(e.survived for e in episodes),
+        camera_fps=(len(frames_in) - 1) / span if frames_in else 0.0,
+        tracker_fps=(len(outputs) - 1) / span if outputs else 0.0,
+        latency_p50_ms=_stat(latency, 50), latency_p95_ms=_stat(latency, 95),
+        lost_frames=sum(st == "lost" for st in s.state), final_state=s.state[-1] if n else "",
+        initial_offset_deg=[math.degrees(s.pan_error[0]), math.degrees(s.tilt_error[0])] if n else [],
+        head_travel_deg=travel, episodes=[asdict(e) for e in episodes],
+    )
+
+
+def read_trace(path: Path) -> np.ndarray:
+    """pelco_sim's true-pose CSV as an array of rows [time, pan, tilt] (rad); empty when missing."""
+    rows = []
+    try:
+        with path.open(newline="") as fh:
+            for row in csv.reader(fh):
+                try:
+                    rows.append([float(row[0]), float(row[1]), float(row[2])])
+                except (ValueError, IndexError):
+                    continue  # header line
+    except OSError:
+        return np.zeros((0, 3))
+    return np.array(rows).reshape(-1, 3)

@@ -1,0 +1,89 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Parameters of the closed-loop demo (params/demo.yaml) and where the package's params files live."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from swir_tracker_ros.demo.processes import DemoError
+from swir_tracker_ros.demo.world import scene_names
+
+PACKAGE = "swir_tracker_ros"
+
+
+@dataclass(frozen=True)
+class DemoParams:
+    """What `demo` runs; the node parameters themselves come from params/<node>.yaml."""
+
+    scene: str = field(default="demo", metadata={"doc": "scene rendered by scene_camera (see scene_names())"})
+    seed: int = field(default=7, metadata={"doc": "scene seed", "min": 0, "max": 2**31 - 1})
+    duration_s: float = field(default=30.0, metadata={"doc": "seconds of scene recorded per run",
+                                                      "min": 1.0, "max": 600.0})
+    storage: str = field(default="mcap", metadata={"doc": "rosbag2 storage", "choices": ("mcap", "sqlite3")})
+    bag_images: bool = field(default=True, metadata={"doc": "record /camera/image_raw in the bag"})
+    snapshots: list[float] = field(default_factory=lambda: [2.0, 8.0, 16.0, 24.0], metadata={
+        "doc": "scene times (s) at which a debug frame is saved as PNG"})
+    startup_timeout_s: float = field(default=60.0, metadata={
+        "doc": "how long the processes may take to come up before the run is abandoned", "min": 5.0,
+        "max": 600.0})
+    pelco_sim_args: list[str] = field(default_factory=list, metadata={
+        "doc": "extra pelco_sim command-line arguments (speed table, latency, faults)"})
+
+    def validate(self) -> DemoParams:
+        if self.scene not in scene_names():
+            raise DemoError(f"demo parameter scene = {self.scene!r} is not one of {scene_names()}")
+        for f in dataclasses.fields(self):
+            value, meta = getattr(self, f.name), f.metadata
+            if "min" in meta and not meta["min"] <= value <= meta["max"]:
+                raise DemoError(f"demo parameter {f.name} = {value!r} is outside "
+                                f"[{meta['min']}, {meta['max']}]")
+            if "choices" in meta and value not in meta["choices"]:
+                raise DemoError(f"demo parameter {f.name} = {value!r} is not one of {list(meta['choices'])}")
+        return self
+
+    def with_duration(self, seconds: float) -> DemoParams:
+        return dataclasses.replace(self, duration_s=float(seconds)).validate()
+
+
+def params_dir() -> Path:
+    """params/ of a source checkout, else share/swir_tracker_ros/params of the install prefix."""
+    source = Path(__file__).resolve().parents[2] / "params"
+    if source.is_dir():
+        return source
+    installed = Path(sys.prefix) / "share" / PACKAGE / "params"
+    if installed.is_dir():
+        return installed
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        return Path(get_package_share_directory(PACKAGE)) / "params"
+    except (ImportError, LookupError) as exc:
+        raise DemoError(f"cannot find the {PACKAGE} params folder (looked in {source} and {installed})"
+                        ) from exc
+
+
+def load_demo_params(path: Path | None = None) -> DemoParams:
+    """DemoParams from the `demo:` mapping of a YAML file (default params/demo.yaml); unknown keys refused."""
+    path = path or params_dir() / "demo.yaml"
+    if not path.is_file():
+        return DemoParams().validate()
+    try:
+        raw = yaml.safe_load(path.read_text()) or {}
+    except (OSError, yaml.YAMLError) as exc:
+        raise DemoError(f"cannot read demo parameters {path}: {exc}") from exc
+    values = raw.get("demo", raw) if isinstance(raw, dict) else None
+    if not isinstance(values, dict):
+        raise DemoError(f"{path} must hold a mapping `demo: {{key: value}}`")
+    known = {f.name for f in dataclasses.fields(DemoParams)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise DemoError(f"{path}: unknown demo parameters {unknown}; known: {sorted(known)}")
+    try:
+        return DemoParams(**values).validate()
+    except TypeError as exc:
+        raise DemoError(f"{path}: {exc}") from exc

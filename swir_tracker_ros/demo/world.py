@@ -1,0 +1,114 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The demo's built-in scene: one pedestrian walking past a pole, behind a wall (stopping while hidden),
+turning back, and passing behind a tree, in a wide SWIR landscape seen from a pan-tilt head."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from swir_tracker_ros.scene.actors import Leg, Path, Pedestrian, Vehicle, pole, tree, wall
+from swir_tracker_ros.scene.scenarios import TARGET_ID as SCENARIO_TARGET_ID
+from swir_tracker_ros.scene.scenarios import scenarios
+from swir_tracker_ros.scene.sensor import SensorModel
+from swir_tracker_ros.scene.texture import Look, make_panorama
+from swir_tracker_ros.scene.world import World
+
+TARGET_ID = 1  # identity of the pedestrian the demo follows
+DISTRACTOR_ID = 2
+VEHICLE_ID = 3
+
+# The target's path (ground metres: x lateral, positive to the camera's left; y range). It starts 2.4 deg
+# left of and 0.9 deg below the head's rest pose, so the head must turn both axes to centre it.
+TARGET_LEGS: tuple[Leg, ...] = (
+    Leg(7.0, vx=-1.4),  # walks right, past the pole (partial occlusion at ~2.6 s), behind the wall at ~6.2 s
+    Leg(1.0),  # stops while hidden (a manoeuvre the Kalman prediction does not know about)
+    Leg(3.5, vx=-1.6),  # walks on, a little faster, and reappears at ~8.6 s
+    Leg(1.0, vy=-1.0),  # turns towards the camera
+    Leg(7.0, vx=1.3),  # turns back and passes behind the wall again (~15.5-17.8 s)
+    Leg(10.5, vx=1.0, vy=0.5),  # walks away to the left; the car passes in front (~20 s), the pole
+    # (~22 s) and the tree (~24 s) hide it partly
+)
+TARGET_START = (3.0, 70.0)
+DEMO_DURATION_S = 30.0  # the scene's natural length (the target keeps walking after it)
+
+
+def demo_world(seed: int = 7, bits: int = 16, fps: float = 25.0) -> World:
+    """The deterministic demo world (same seed, same scene) rendered by the `scene_camera` node.
+
+    Occluders are placed on the target's path: a pole (partial, at ~2.6 s), a wall (full, ~6.7-10 s,
+    during which the target stops for 1.2 s), and a tree it passes behind after turning back (~16-19 s).
+    A second pedestrian with a similar look walks the other way further away (clutter), and a car crosses
+    in front of it at ~20 s (a moving occluder covering its legs).
+    """
+    panorama = make_panorama(seed, az_span_deg=60.0, el_min_deg=-9.0, el_max_deg=5.0)
+    target = Pedestrian(TARGET_ID, Path(TARGET_START, TARGET_LEGS), seed=seed,
+                        look=Look(head=0.62, upper=0.2, lower=0.14, texture=0.05))
+    distractor = Pedestrian(DISTRACTOR_ID, Path((-18.0, 95.0), (Leg(30.0, vx=1.1),)), seed=seed,
+                            look=Look(head=0.6, upper=0.26, lower=0.18, texture=0.05))
+    car = Vehicle(VEHICLE_ID, Path((-82.0, 45.0), (Leg(40.0, vx=4.0),)), seed=seed)
+    objects = [
+        target,
+        distractor,
+        car,
+        pole(-0.5, 60.0, height_m=6.0, width_m=0.35, seed=seed),
+        wall(-5.7, 58.0, width_m=1.8, height_m=2.6, seed=seed),
+        tree(1.0, 60.0, width_m=2.0, height_m=5.5, seed=seed),
+    ]
+    sensor = SensorModel(bits=bits, noise=0.006, fpn=0.003, vignetting=0.12, fps=fps)
+    return World(panorama=panorama, objects=objects, sensor=sensor, seed=seed)
+
+
+@dataclass(frozen=True)
+class BuiltScene:
+    """A world ready to render, its natural length and the identity of the pedestrian to follow."""
+
+    name: str
+    world: World
+    duration_s: float
+    target_id: int
+
+
+def scene_names() -> list[str]:
+    """'demo' and every harness scenario name (`swir_tracker_ros.scene.scenarios`)."""
+    return ["demo", *scenarios()]
+
+
+def build_scene(name: str, seed: int, bits: int = 16, fps: float = 25.0) -> BuiltScene:
+    """The demo world or a harness scenario's world, with the sensor's bit depth and frame rate set."""
+    if name == "demo":
+        return BuiltScene(name, demo_world(seed, bits=bits, fps=fps), DEMO_DURATION_S, TARGET_ID)
+    specs = scenarios()
+    if name not in specs:
+        raise ValueError(f"unknown scene {name!r}; known: {', '.join(scene_names())}")
+    world = specs[name].build(seed)
+    world.sensor = replace(world.sensor, bits=bits, fps=fps)
+    return BuiltScene(name, world, specs[name].duration_s, SCENARIO_TARGET_ID)
+
+
+class SceneClock:
+    """Scene time from a wall clock: 0 until started, then seconds since the start, held at `duration_s`."""
+
+    def __init__(self, duration_s: float, started_at: float | None = None) -> None:
+        if not (duration_s > 0 and math.isfinite(duration_s)):
+            raise ValueError(f"scene duration must be a positive number of seconds, got {duration_s}")
+        self.duration_s = duration_s
+        self.started_at = started_at
+
+    @property
+    def running(self) -> bool:
+        return self.started_at is not None
+
+    def start(self, now: float) -> float:
+        """Start at `now` unless already started; returns the start time in force."""
+        if self.started_at is None:
+            self.started_at = now
+        return self.started_at
+
+    def time(self, now: float) -> float:
+        if self.started_at is None:
+            return 0.0
+        return min(max(now - self.started_at, 0.0), self.duration_s)
+
+    def finished(self, now: float) -> bool:
+        return self.started_at is not None and now - self.started_at >= self.duration_s

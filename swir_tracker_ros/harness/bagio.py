@@ -1,0 +1,334 @@
+# SPDX-License-Identifier: Apache-2.0
+"""rosbag2 reading and writing with `rosbags`: sqlite3 and mcap, directories or single files, zstd."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StoragePlugin, Writer
+
+from msg_adapters import bag as mb
+from msg_adapters.errors import MessageError
+
+from ..errors import HarnessError
+from ..types import Box
+
+try:  # Python 3.14 ships compression.zstd; rosbags depends on the backport before that
+    from compression import zstd  # type: ignore[import-not-found]
+except ImportError:  # pragma: no cover - depends on the interpreter
+    from backports import zstd  # type: ignore[import-not-found,no-redef]
+
+IMAGE_TOPIC = "/camera/image_raw"
+INFO_TOPIC = "/camera/camera_info"
+GT_TOPIC = "/ground_truth/box"
+OCCLUDED_TOPIC = "/ground_truth/occluded"  # std_msgs/Bool per frame (synthetic scenarios)
+BOOL = "std_msgs/msg/Bool"
+
+
+@dataclass(frozen=True)
+class FrameRecord:
+    """One frame to write or one frame read back: image, ground truth (None = absent), occlusion flag."""
+
+    stamp_ns: int
+    image: np.ndarray
+    gt: Box | None
+    occluded: bool | None = None
+    index: int = 0
+
+
+@dataclass(frozen=True)
+class TopicCount:
+    topic: str
+    msgtype: str
+    declared: int | None  # from metadata.yaml / storage statistics; None when the storage gives none
+    read: int
+
+
+@dataclass
+class BagInfo:
+    path: Path
+    storage: str
+    files: list[str]
+    version: int | None
+    compression: str | None
+    start_ns: int
+    end_ns: int
+    topics: list[TopicCount]
+    read_mode: str  # "directory" or "storage files"
+    custom: dict[str, str] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def duration_s(self) -> float:
+        return max(0, self.end_ns - self.start_ns) / 1e9
+
+    def count(self, topic: str) -> int:
+        return next((t.read for t in self.topics if t.topic == topic), 0)
+
+
+def write_bag(out: Path, frames: Iterable[FrameRecord], *, storage: str = "sqlite3",
+              compress: str | None = None, camera_info: dict[str, Any] | None = None,
+              custom: dict[str, str] | None = None, frame_id: str = "camera") -> int:
+    """Write frames to a new rosbag2 directory `out` (version 9); returns the number of frames written.
+
+    Topics: /camera/image_raw (mono8/mono16), /camera/camera_info (if given: width, height, k, d),
+    /ground_truth/box (PolygonStamped, empty = absent) and /ground_truth/occluded (Bool, when known).
+    Messages are logged at their header stamps.
+    """
+    out = Path(out)
+    plugin = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}.get(storage)
+    if plugin is None:
+        raise HarnessError(f"{out}: storage must be sqlite3 or mcap, got {storage!r}")
+    if out.exists():
+        raise HarnessError(f"{out} exists already; rosbag2 writers never overwrite a bag")
+    ts = mb.typestore()
+    n = 0
+    try:
+        with _open_writer(out, plugin, compress) as w:
+            for key, value in (custom or {}).items():
+                w.set_custom_data(key, value)
+            img_c = w.add_connection(IMAGE_TOPIC, mb.IMAGE, typestore=ts)
+            gt_c = w.add_connection(GT_TOPIC, mb.POLYGON_STAMPED, typestore=ts)
+            info_c = w.add_connection(INFO_TOPIC, mb.CAMERA_INFO, typestore=ts) if camera_info else None
+            occ_c = None
+            for fr in frames:
+                t = fr.stamp_ns
+                w.write(img_c, t, mb.serialize(mb.image_msg(fr.image, t, frame_id)))
+                if info_c is not None:
+                    ci = camera_info
+                    info = mb.camera_info_msg(int(ci["width"]), int(ci["height"]), list(ci["k"]), t, frame_id,
+                                              ci.get("d"))
+                    w.write(info_c, t, mb.serialize(info))
+                w.write(gt_c, t, mb.serialize(mb.box_to_polygon(fr.gt, t, frame_id)))
+                if fr.occluded is not None:
+                    if occ_c is None:
+                        occ_c = w.add_connection(OCCLUDED_TOPIC, BOOL, typestore=ts)
+                    w.write(occ_c, t, mb.serialize(ts.types[BOOL](data=bool(fr.occluded))))
+                n += 1
+    except MessageError as exc:
+        raise HarnessError(f"{out}: frame {n} cannot be written: {exc}") from None
+    return n
+
+
+def _open_writer(out: Path, plugin: StoragePlugin, compress: str | None) -> Writer:
+    w = Writer(out, version=9, storage_plugin=plugin)
+    if compress:
+        if compress != "zstd":
+            raise HarnessError(f"{out}: only zstd compression is supported, got {compress!r}")
+        mode = CompressionMode.STORAGE if plugin == StoragePlugin.MCAP else CompressionMode.MESSAGE
+        w.set_compression(mode, CompressionFormat.ZSTD)
+    return w
+
+
+class BagReader:
+    """Opens a bag (directory or single .db3/.mcap file) and streams raw messages with a count cross-check.
+
+    When metadata.yaml declares a connection that no storage connection matches (rosbags compares the QoS
+    text too; ROS 2's own test bags differ there), the storage files are read directly instead, so a QoS
+    mismatch never yields zero messages.
+    """
+
+    def __init__(self, path: Path | str) -> None:
+        self.path = Path(path)
+        if not self.path.exists():
+            raise HarnessError(f"{self.path}: no such bag")
+        self.notes: list[str] = []
+        self.read_mode = "directory" if self.path.is_dir() else "storage file"
+        self.files: list[Path] = [self.path]
+        reader = self._open(self.path)
+        try:
+            self.storage = self._storage_id(reader)
+            self.version = _metadata_version(self.path)
+            self.compression = reader.compression_format if reader.compression_mode else None
+            self.compression_mode = reader.compression_mode
+            meta = getattr(reader.storage, "metadata", None)
+            self.custom = dict((meta.custom if meta is not None else None) or {})
+            self.start_ns, self.end_ns = reader.start_time, reader.end_time
+            self.connections = [(c.topic, c.msgtype, c.msgcount) for c in reader.connections]
+            if self.path.is_dir():
+                rel = _metadata(self.path).get("relative_file_paths", [])
+                self.files = [self.path / Path(f).name for f in rel]
+                unmatched = _unmatched(reader)
+                if unmatched:
+                    self.read_mode = "storage files"
+                    self.notes.append(f"metadata connections {sorted(unmatched)} differ from the storage "
+                                      "(QoS text); reading the storage files directly")
+        finally:
+            reader.close()
+
+    def _open(self, path: Path) -> Reader:
+        try:
+            reader = Reader(path)
+            reader.open()
+        except Exception as exc:  # rosbags, sqlite3, mcap and zstd raise many types for one cause
+            raise HarnessError(f"{path}: cannot open the bag: {type(exc).__name__}: {exc}") from None
+        return reader
+
+    @staticmethod
+    def _storage_id(reader: Reader) -> str:
+        name = type(reader.storage).__name__.lower()
+        if "directory" in name:
+            return str(_metadata(reader.path).get("storage_identifier", "?"))
+        return "mcap" if "mcap" in name else "sqlite3"
+
+    def topics(self) -> dict[str, str]:
+        return {t: m for t, m, _ in self.connections}
+
+    def declared(self) -> dict[str, int | None]:
+        out: dict[str, int | None] = {}
+        for t, _, n in self.connections:
+            out[t] = (out.get(t) or 0) + n if n is not None else out.get(t)
+        return out
+
+    def messages(self, topics: set[str] | None = None) -> Iterator[tuple[str, str, int, bytes]]:
+        """(topic, msgtype, log time ns, raw CDR) in storage order; HarnessError on a corrupt bag."""
+        sources = self.files if self.read_mode == "storage files" else [self.path]
+        last = "none (the first message could not be read)"
+        count = 0
+        for src in sources:
+            if self.read_mode == "storage files" and self.compression_mode == "file":
+                raise HarnessError(f"{src}: file-compressed storage cannot be read directly")
+            reader = self._open(src)
+            try:
+                conns = [c for c in reader.connections if topics is None or c.topic in topics]
+                it = reader.messages(connections=conns) if conns else iter(())
+                while True:
+                    try:
+                        conn, t, raw = next(it)
+                    except StopIteration:
+                        break
+                    except Exception as exc:
+                        raise HarnessError(f"{src}: unreadable after {count} good messages; last good "
+                                           f"message: {last}: {type(exc).__name__}: {exc}") from None
+                    if self.read_mode == "storage files" and self.compression_mode == "message":
+                        raw = zstd.decompress(raw)
+                    yield conn.topic, conn.msgtype, t, raw
+                    count += 1
+                    last = f"#{count} {conn.topic} at {t} ns"
+            finally:
+                reader.close()
+
+    def deserialize(self, raw: bytes, msgtype: str, where: str) -> Any:
+        try:
+            return mb.deserialize(raw, msgtype)
+        except Exception as exc:
+            why = f"{type(exc).__name__}: {exc}"
+            raise HarnessError(f"{self.path}: {where}: cannot decode {msgtype}: {why}") from None
+
+
+def _metadata(path: Path) -> dict[str, Any]:
+    meta = path / "metadata.yaml"
+    if not meta.exists():
+        return {}
+    from ruamel.yaml import YAML
+
+    try:
+        return YAML(typ="safe").load(meta.read_text()).get("rosbag2_bagfile_information", {})
+    except Exception as exc:
+        raise HarnessError(f"{meta}: unreadable metadata: {exc}") from None
+
+
+def _metadata_version(path: Path) -> int | None:
+    v = _metadata(path).get("version") if path.is_dir() else None
+    return int(v) if v is not None else None
+
+
+def _unmatched(reader: Reader) -> set[str]:
+    """Metadata connections that no storage connection matches the way rosbags' DirectoryReader matches."""
+    storages = getattr(reader.storage, "storages", [])
+    out = set()
+    for c in reader.connections:
+        if not any(x.topic == c.topic and x.msgtype == c.msgtype and x.ext == c.ext
+                   and (not x.digest or not c.digest or x.digest == c.digest)
+                   for s in storages for x in s.connections):
+            out.add(c.topic)
+    return out
+
+
+def bag_info(path: Path | str) -> BagInfo:
+    """Storage, duration, topics with types and message counts as declared and as actually read."""
+    br = BagReader(path)
+    read: dict[str, int] = {}
+    types = br.topics()
+    t0, t1 = None, None
+    for topic, msgtype, t, _ in br.messages():
+        read[topic] = read.get(topic, 0) + 1
+        types.setdefault(topic, msgtype)
+        t0 = t if t0 is None else min(t0, t)
+        t1 = t if t1 is None else max(t1, t)
+    declared = br.declared()
+    topics = [TopicCount(tp, types[tp], declared.get(tp), read.get(tp, 0)) for tp in sorted(types)]
+    notes = list(br.notes)
+    for tc in topics:
+        if tc.declared is not None and tc.declared != tc.read:
+            notes.append(f"{tc.topic}: {tc.declared} messages declared but {tc.read} read")
+    return BagInfo(br.path, br.storage, [str(f) for f in br.files], br.version, br.compression,
+                   t0 if t0 is not None else 0, t1 if t1 is not None else 0, topics, br.read_mode,
+                   br.custom, notes)
+
+
+def pick_topic(br: BagReader, wanted: str | None, default: str, msgtype: str) -> str | None:
+    """The flag's topic, else the default name, else the only topic of that type (None if there is none)."""
+    topics = br.topics()
+    if wanted:
+        if wanted not in topics:
+            raise HarnessError(f"{br.path}: topic {wanted} not in the bag (topics: {', '.join(topics)})")
+        return wanted
+    if topics.get(default) == msgtype:
+        return default
+    typed = [t for t, m in topics.items() if m == msgtype]
+    return typed[0] if len(typed) == 1 else None
+
+
+def read_frames(path: Path | str, image_topic: str | None = None, gt_topic: str | None = None
+                ) -> Iterator[FrameRecord]:
+    """Stream frames with their ground truth (matched by header stamp) from a bag.
+
+    Topics are taken from the flags, else /camera/image_raw and /ground_truth/box, else discovered by type.
+    Raises HarnessError when the bag has no image topic, is corrupt, or yields fewer images than declared.
+    """
+    br = BagReader(path)
+    img_t = pick_topic(br, image_topic, IMAGE_TOPIC, mb.IMAGE)
+    if img_t is None:
+        raise HarnessError(f"{br.path}: no sensor_msgs/msg/Image topic (topics: {', '.join(br.topics())})")
+    box_t = pick_topic(br, gt_topic, GT_TOPIC, mb.POLYGON_STAMPED)
+    gts: dict[int, Box | None] = {}
+    occ: dict[int, bool] = {}
+    side = {t for t in (box_t, OCCLUDED_TOPIC) if t}
+    for topic, msgtype, t, raw in br.messages(side):
+        msg = br.deserialize(raw, msgtype, f"{topic} at {t} ns")
+        stamp = mb.stamp_to_ns(msg.header.stamp) if topic == box_t else t
+        try:
+            if topic == box_t:
+                gts[stamp] = mb.polygon_to_box(msg)
+            else:
+                occ[t] = bool(msg.data)
+        except MessageError as exc:
+            raise HarnessError(f"{br.path}: {topic} at {t} ns: {exc}") from None
+    k = 0
+    for _topic, msgtype, t, raw in br.messages({img_t}):
+        msg = br.deserialize(raw, msgtype, f"image #{k + 1} at {t} ns")
+        stamp = mb.stamp_to_ns(msg.header.stamp)
+        try:
+            image = mb.image_to_array(msg)
+        except MessageError as exc:
+            raise HarnessError(f"{br.path}: image #{k + 1} at {t} ns: {exc}") from None
+        yield FrameRecord(stamp, image, gts.get(stamp), occ.get(t), k)
+        k += 1
+    declared = br.declared().get(img_t)
+    if declared is not None and k < declared:
+        raise HarnessError(f"{br.path}: {declared} images declared but only {k} read; the bag is truncated")
+
+
+def sequence_meta(path: Path | str) -> dict[str, Any]:
+    """The `swir_sequence` custom-data entry written by make-bag (name, fps, source); {} if absent."""
+    custom = BagReader(path).custom
+    try:
+        return json.loads(custom.get("swir_sequence", "{}"))
+    except json.JSONDecodeError:
+        return {}

@@ -1,0 +1,114 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Frame sources the harness scores: rosbag2 bags, sequence folders (PNG + gt.txt) and synthetic scenarios."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from itertools import islice
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from ..errors import HarnessError
+from ..types import Box
+from .bagio import FrameRecord, read_frames, sequence_meta
+
+SYNTH_PREFIX = "synth:"
+T0_NS = 1_000_000_000  # stamp of frame 0 in bags we write (1 s after the epoch, never 0)
+
+
+@dataclass
+class Source:
+    """A re-iterable sequence: `frames()` streams FrameRecords (image, ground truth, occlusion flag)."""
+
+    name: str
+    kind: str  # "bag", "sequence" or "synth"
+    location: str
+    fps: float = 25.0
+    bits: int | None = None  # significant bits of the pixel values (12 in a uint16 container, ...)
+    max_frames: int | None = None
+    meta: dict = field(default_factory=dict)
+    image_topic: str | None = None
+    gt_topic: str | None = None
+
+    def frames(self) -> Iterator[FrameRecord]:
+        if self.kind == "bag":
+            it = read_frames(self.location, self.image_topic, self.gt_topic)
+        elif self.kind == "sequence":
+            it = _sequence_frames(Path(self.location), self.fps, self.meta)
+        else:
+            it = _synth_frames(self.location, self.fps)
+        return islice(it, self.max_frames) if self.max_frames else it
+
+
+def open_source(spec: str | Path, max_frames: int | None = None, image_topic: str | None = None,
+                gt_topic: str | None = None) -> Source:
+    """`synth:NAME` (or a bare scenario name), a sequence folder with gt.txt, or a bag directory/file."""
+    text = str(spec)
+    from ..scene import scenarios
+
+    if text.startswith(SYNTH_PREFIX) or (not Path(text).exists() and text in scenarios()):
+        name = text.removeprefix(SYNTH_PREFIX)
+        if name not in scenarios():
+            raise HarnessError(f"unknown synthetic scenario {name!r}; `harness synth --list` names them")
+        from ..scene.scenarios import make_scenario
+
+        bits = make_scenario(name).world.sensor.bits
+        return Source(name, "synth", name, 25.0, bits, max_frames)
+    path = Path(text)
+    if not path.exists():
+        raise HarnessError(f"{path}: no such bag, sequence folder or scenario")
+    if path.is_dir() and (path / "gt.txt").exists():
+        meta = json.loads((path / "meta.json").read_text()) if (path / "meta.json").exists() else {}
+        return Source(path.name, "sequence", str(path), float(meta.get("fps", 25.0)), 8, max_frames, meta)
+    meta = sequence_meta(path)
+    name = str(meta.get("name") or (path.name if path.is_dir() else path.stem))
+    return Source(name, "bag", str(path), float(meta.get("fps", 25.0)), meta.get("bits"), max_frames, meta,
+                  image_topic, gt_topic)
+
+
+def _occluded_set(meta: dict) -> set[int] | None:
+    frames = meta.get("occlusion_frames")
+    return {int(f) for f in frames} if frames is not None else None
+
+
+def _sequence_frames(path: Path, fps: float, meta: dict) -> Iterator[FrameRecord]:
+    gt_lines = [ln for ln in (path / "gt.txt").read_text().splitlines() if ln.strip()]
+    images = sorted(path.glob("*.png"))
+    if len(images) != len(gt_lines):
+        raise HarnessError(f"{path}: {len(images)} PNG frames but {len(gt_lines)} lines in gt.txt")
+    occ = _occluded_set(meta)
+    for k, (img_path, line) in enumerate(zip(images, gt_lines)):
+        image = cv2.imread(str(img_path), cv2.IMREAD_UNCHANGED)
+        if image is None:
+            raise HarnessError(f"{img_path}: unreadable image")
+        try:
+            x, y, w, h = (float(v) for v in line.replace("\t", ",").split(",")[:4])
+        except ValueError:
+            raise HarnessError(f"{path / 'gt.txt'}: line {k + 1} is not x,y,w,h: {line!r}") from None
+        gt = Box(x, y, w, h) if w > 0 and h > 0 else None
+        flag = (k + 1) in occ if occ is not None else None
+        yield FrameRecord(T0_NS + round(k * 1e9 / fps), image, gt, flag, k)
+
+
+def _synth_frames(name: str, fps: float) -> Iterator[FrameRecord]:
+    from ..scene.scenarios import make_scenario
+
+    run = make_scenario(name, fps=fps)
+    for fr in run:
+        gt = fr.target.box if fr.target is not None else None
+        yield FrameRecord(T0_NS + round(fr.index * 1e9 / fps), fr.image, gt, fr.occluded, fr.index)
+
+
+def convert_bits(image: np.ndarray, src_bits: int, dst_bits: int) -> np.ndarray:
+    """Rescale pixel values from `src_bits` significant bits to an 8-bit (uint8) or 16-bit (uint16) image."""
+    if dst_bits not in (8, 16):
+        raise HarnessError(f"--bits must be 8 or 16, got {dst_bits}")
+    if src_bits == dst_bits and image.dtype == (np.uint8 if dst_bits == 8 else np.uint16):
+        return image
+    scale = ((1 << dst_bits) - 1) / ((1 << src_bits) - 1)
+    out = np.rint(image.astype(np.float64) * scale)
+    return out.astype(np.uint8 if dst_bits == 8 else np.uint16)

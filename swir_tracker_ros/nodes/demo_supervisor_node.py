@@ -1,0 +1,287 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Demo supervisor: records the closed-loop graph, initialises the track from ground truth, runs the scene."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PolygonStamped, Vector3Stamped
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
+from std_srvs.srv import Trigger
+
+from msg_adapters.camera_info import intrinsics_from_camera_info
+from msg_adapters.errors import MessageError
+from msg_adapters.geometry import box_from_polygon, box_to_roi, pan_tilt_error_from_msg
+from msg_adapters.joint_state import joint_state_to_pan_tilt
+from msg_adapters.stamps import stamp_to_seconds
+from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros.demo.recording import RECORDED_TOPICS, BagRecorder, RunRecords
+from swir_tracker_ros.demo.video import VideoSink, caption
+from swir_tracker_ros.nodes.scene_camera_node import GROUND_TRUTH_STATE, ground_truth_state_values
+
+RECORD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)  # matches any publisher
+TYPES = {
+    "sensor_msgs/msg/Image": Image, "sensor_msgs/msg/CameraInfo": CameraInfo,
+    "geometry_msgs/msg/PolygonStamped": PolygonStamped, "geometry_msgs/msg/Vector3Stamped": Vector3Stamped,
+    "diagnostic_msgs/msg/DiagnosticArray": DiagnosticArray, "sensor_msgs/msg/JointState": JointState,
+    "sensor_msgs/msg/RegionOfInterest": RegionOfInterest,
+}
+
+
+def _box(box) -> list[float] | None:
+    return None if box is None else [box.x, box.y, box.w, box.h]
+
+
+def debug_frame(msg: Image):
+    """bgr8 / mono8 debug image -> numpy BGR (row padding honoured)."""
+    from msg_adapters.image import image_to_numpy
+
+    frame, _bits = image_to_numpy(msg)
+    return frame
+
+
+class DemoSupervisor(Node):
+    """Phases: wait for the graph, initialise the track, start the scene, record for `duration` seconds."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        super().__init__("demo_supervisor")
+        self.args = args
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        self.out = out
+        self.rec = RunRecords(label=args.label, ego_motion_compensation=args.ego, duration_s=args.duration)
+        self.bag = BagRecorder(out / "bag", storage=args.storage) if args.bag else None
+        self.rec.bag = str(out / "bag") if args.bag else ""
+        self.video = VideoSink(out / "debug", fps=args.fps) if args.video else None
+        self.snapshot_times = [float(s) for s in args.snapshots]
+        self.phase = "wait_graph"
+        self.phase_since = time.time()
+        self.done = False
+        self.exit_code = 0
+        self.latest_gt = None
+        self.latest_gt_stamp = -1.0
+        self.latest_state = ""
+        self.latest_state_stamp = -1.0
+        self.joints_seen = False
+        self.last_init_pub = 0.0
+        self.start_future = None
+        self.scene_t = 0.0
+        self.scene_times: dict[float, float] = {}  # frame stamp -> scene time, recent frames
+        self._skip_images = not args.bag_images
+        for topic, type_name in RECORDED_TOPICS.items():
+            if topic == "/track/init":
+                continue  # recorded as published by this node
+            self.create_subscription(TYPES[type_name], topic, self._make_cb(topic), RECORD_QOS, raw=True)
+        if self.video is not None:
+            self.create_subscription(Image, "/track/debug_image", self._on_debug, RECORD_QOS, raw=True)
+        self.init_pub = self.create_publisher(RegionOfInterest, "/track/init", 1)
+        self.start_client = self.create_client(Trigger, "/scene/start")
+        self.timer = self.create_timer(0.05, self._tick)
+
+    # ---------------------------------------------------------------- recording
+    def _make_cb(self, topic: str):
+        msg_type = TYPES[RECORDED_TOPICS[topic]]
+
+        def cb(data: bytes) -> None:
+            now = time.time()
+            if self.bag is not None and not (topic == "/camera/image_raw" and self._skip_images):
+                self.bag.write(topic, int(now * 1e9), data)
+            if topic == "/camera/image_raw":
+                self._on_frame_raw(data, now)
+                return
+            try:
+                self._on_message(topic, deserialize_message(data, msg_type), now)
+            except MessageError as exc:
+                self.get_logger().warning(f"{topic}: {exc}", throttle_duration_sec=5.0)
+
+        return cb
+
+    def _on_frame_raw(self, data: bytes, now: float) -> None:
+        # Only the header is needed: decode the stamp from the CDR bytes (4-byte encapsulation + sec + nsec).
+        sec = int.from_bytes(data[4:8], "little", signed=True)
+        nsec = int.from_bytes(data[8:12], "little", signed=False)
+        self.rec.frames.append([sec + nsec * 1e-9, now])
+
+    def _on_message(self, topic: str, msg, now: float) -> None:
+        if topic == "/ground_truth/box":
+            box = box_from_polygon(msg)
+            stamp = stamp_to_seconds(msg.header.stamp)
+            self.rec.gt.append([stamp, _box(box)])
+            self.latest_gt, self.latest_gt_stamp = box, stamp
+        elif topic == GROUND_TRUTH_STATE:
+            v = ground_truth_state_values(msg)
+            if v is not None:
+                stamp = stamp_to_seconds(msg.header.stamp)
+                self.scene_t = v["scene_time"]
+                self.rec.truth.append([stamp, v["scene_time"], v["in_view"], v["visible"],
+                                       v["pan_error"], v["tilt_error"], v["head_pan"], v["head_tilt"]])
+                self.scene_times[round(stamp, 4)] = v["scene_time"]
+                if len(self.scene_times) > 500:
+                    self.scene_times.pop(next(iter(self.scene_times)))
+        elif topic == "/track/box":
+            self.rec.track.append([stamp_to_seconds(msg.header.stamp), now, _box(box_from_polygon(msg))])
+        elif topic == "/track/pan_tilt_error":
+            pan, tilt, stamp = pan_tilt_error_from_msg(msg)
+            self.rec.error.append([stamp, now, pan, tilt])
+        elif topic == "/track/state":
+            state = track_state_from_msg(msg).value
+            stamp = stamp_to_seconds(msg.header.stamp)
+            self.rec.state.append([stamp, now, state])
+            self.latest_state, self.latest_state_stamp = state, stamp
+        elif topic == "/positioner/joint_states":
+            pan, tilt, stamp = joint_state_to_pan_tilt(msg)
+            self.rec.joints.append([stamp, now, pan, tilt])
+            self.joints_seen = True
+        elif topic == "/camera/camera_info" and not self.rec.camera:
+            intr = intrinsics_from_camera_info(msg)
+            self.rec.camera = {"width": intr.width, "height": intr.height, "fx": intr.fx, "fy": intr.fy,
+                               "cx": intr.cx, "cy": intr.cy}
+        elif topic == "/diagnostics":
+            for status in msg.status:
+                self.rec.diagnostics.append({"recv": now, "name": status.name,
+                                             "values": {kv.key: kv.value for kv in status.values}})
+
+    def _on_debug(self, data: bytes) -> None:
+        if self.video is None or self.phase not in ("init", "start", "run"):
+            return
+        try:
+            msg = deserialize_message(data, Image)
+            frame = debug_frame(msg)
+        except MessageError as exc:
+            self.get_logger().warning(f"/track/debug_image: {exc}", throttle_duration_sec=5.0)
+            return
+        t = self.scene_times.get(round(stamp_to_seconds(msg.header.stamp), 4), self.scene_t)
+        mode = "ego-motion compensation ON" if self.args.ego else "ego-motion compensation OFF"
+        frame = caption(frame, f"scene t = {t:5.2f} s   {mode}")
+        self.video.write(frame)
+        self.rec.debug_frames += 1
+        if self.snapshot_times and self.phase == "run" and t >= self.snapshot_times[0]:
+            import cv2
+
+            self.snapshot_times.pop(0)
+            cv2.imwrite(str(self.out / f"frame_{t:05.2f}s.png"), frame)
+
+    # ---------------------------------------------------------------- phases
+    def _set_phase(self, phase: str) -> None:
+        self.get_logger().info(f"phase {self.phase} -> {phase}")
+        self.phase, self.phase_since = phase, time.time()
+
+    def _fail(self, why: str) -> None:
+        self.get_logger().error(why)
+        self.rec.outcome = why
+        self.exit_code = 3
+        self.done = True
+
+    def _tick(self) -> None:
+        now = time.time()
+        waited = now - self.phase_since
+        if self.phase == "wait_graph":
+            ready = (self.latest_gt is not None and self.joints_seen
+                     and self.init_pub.get_subscription_count() > 0 and self.start_client.service_is_ready())
+            if ready:
+                self._set_phase("init")
+            elif waited > self.args.startup_timeout:
+                have_gt = self.latest_gt is not None
+                self._fail(f"graph not ready after {waited:.0f} s: ground truth {have_gt}, "
+                           f"joint states {self.joints_seen}, tracker listening on /track/init "
+                           f"{self.init_pub.get_subscription_count() > 0}, /scene/start "
+                           f"{self.start_client.service_is_ready()}")
+        elif self.phase == "init":
+            tracking = self.latest_state in ("tracking", "occluded")
+            if tracking and self.latest_state_stamp >= self.rec.init_time:
+                self.start_future = self.start_client.call_async(Trigger.Request())
+                self._set_phase("start")
+            elif waited > self.args.init_timeout:
+                self._fail(f"the tracker did not report tracking within {waited:.0f} s of /track/init "
+                           f"(last state {self.latest_state!r})")
+            elif now - self.last_init_pub > 0.5 and self.latest_gt is not None:
+                self._publish_init(now)
+        elif self.phase == "start":
+            if self.start_future is not None and self.start_future.done():
+                result = self.start_future.result()
+                if result is None or not result.success:
+                    self._fail(f"/scene/start refused: {getattr(result, 'message', 'no response')}")
+                    return
+                self.rec.scene_start = float(result.message.split()[-1])
+                self._set_phase("run")
+            elif waited > 5.0:
+                self._fail("/scene/start did not answer within 5 s")
+        elif self.phase == "run" and now - self.rec.scene_start >= self.args.duration:
+            self.rec.outcome = "completed"
+            self.done = True
+
+    def _publish_init(self, now: float) -> None:
+        box = self.latest_gt
+        cam = self.rec.camera
+        width, height = int(cam.get("width", 1 << 16)), int(cam.get("height", 1 << 16))
+        roi = box_to_roi(box, width, height)
+        self.init_pub.publish(roi)
+        if self.bag is not None:
+            from rclpy.serialization import serialize_message
+
+            self.bag.write("/track/init", int(now * 1e9), serialize_message(roi))
+        self.rec.init_time = self.latest_gt_stamp
+        self.rec.init_box = [float(roi.x_offset), float(roi.y_offset), float(roi.width), float(roi.height)]
+        self.last_init_pub = now
+        self.get_logger().info(f"/track/init {self.rec.init_box} from ground truth")
+
+    def finish(self) -> None:
+        """Close the bag and the video and write records.json (also after an interrupt)."""
+        if self.bag is not None:
+            self.bag.close()
+            self.rec.bag_counts = dict(self.bag.counts)
+        if self.video is not None:
+            path = self.video.close()
+            self.rec.video = str(path) if path else ""
+        if self.rec.outcome == "running":
+            self.rec.outcome = "interrupted"
+        self.rec.save(self.out / "records.json")
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="demo_supervisor", description=__doc__)
+    p.add_argument("--out", required=True, help="run folder: bag/, debug.mp4, records.json, frame_*.png")
+    p.add_argument("--duration", type=float, default=30.0, help="seconds of scene to record after start")
+    p.add_argument("--label", default="run")
+    p.add_argument("--ego", type=int, default=1, help="1 if the tracker compensates ego-motion (for labels)")
+    p.add_argument("--fps", type=float, default=25.0, help="frame rate of the debug video")
+    p.add_argument("--storage", default="mcap", choices=("mcap", "sqlite3"))
+    p.add_argument("--bag", type=int, default=1, help="write a rosbag2 (0: no bag)")
+    p.add_argument("--bag-images", type=int, default=1, help="include /camera/image_raw in the bag")
+    p.add_argument("--video", type=int, default=1, help="subscribe /track/debug_image and write a video")
+    p.add_argument("--snapshots", type=float, nargs="*", default=[], help="scene times of PNG stills")
+    p.add_argument("--startup-timeout", type=float, default=60.0)
+    p.add_argument("--init-timeout", type=float, default=10.0)
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv if argv is None else argv
+    args = parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
+    args.ego = bool(args.ego)
+    rclpy.init(args=argv)
+    node = DemoSupervisor(args)
+    try:
+        while rclpy.ok() and not node.done:
+            rclpy.spin_once(node, timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        node.rec.outcome = "interrupted"
+    finally:
+        node.finish()
+        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return node.exit_code if node.rec.outcome != "interrupted" else 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

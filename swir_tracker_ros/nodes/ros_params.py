@@ -1,0 +1,188 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Declare a flat parameter dataclass as described, range-checked ROS parameters (docs/interfaces.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import typing
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    ParameterType,
+    SetParametersResult,
+)
+from rclpy.exceptions import (
+    InvalidParameterTypeException,
+    InvalidParameterValueException,
+    ParameterException,
+)
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from swir_tracker_ros.errors import ParameterError
+
+P = TypeVar("P")
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+
+_PTYPES = {
+    float: ParameterType.PARAMETER_DOUBLE,
+    int: ParameterType.PARAMETER_INTEGER,
+    bool: ParameterType.PARAMETER_BOOL,
+    str: ParameterType.PARAMETER_STRING,
+    list: ParameterType.PARAMETER_DOUBLE_ARRAY,
+}
+
+
+def _base_type(annotation: Any) -> type:
+    """float / int / bool / str / list for the field types the contract allows (list[float], tuples too)."""
+    origin = typing.get_origin(annotation)
+    if origin in (list, tuple):
+        return list
+    if annotation in _PTYPES:
+        return annotation
+    raise ParameterError(f"parameter field type {annotation!r} is not float, int, bool, str or list[float]")
+
+
+def _default(f: dataclasses.Field) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    raise ParameterError(f"parameter field {f.name!r} has no default value")
+
+
+def _coerce(kind: type, name: str, value: Any) -> Any:
+    """Python value of the dataclass field type from a ROS parameter value."""
+    try:
+        if kind is float:
+            return float(value)
+        if kind is int and not isinstance(value, bool):
+            return int(value)
+        if kind is bool and isinstance(value, bool):
+            return value
+        if kind is str and isinstance(value, str):
+            return value
+        if kind is list:
+            return [float(v) for v in value]
+    except (TypeError, ValueError):
+        pass
+    raise ParameterError(f"parameter {name} must be of type {kind.__name__}, got {value!r}")
+
+
+def check_metadata(params: Any, prefix: str = "") -> None:
+    """Raise `ParameterError` when a field breaks its metadata `min` / `max` / `choices` or is not finite."""
+    for f in dataclasses.fields(params):
+        value, meta, name = getattr(params, f.name), f.metadata, prefix + f.name
+        values = value if isinstance(value, (list, tuple)) else [value]
+        for v in values:
+            if isinstance(v, float) and not math.isfinite(v):
+                raise ParameterError(f"parameter {name} must be finite, got {value!r}")
+            if isinstance(v, (int, float)) and not isinstance(v, bool):
+                if "min" in meta and v < meta["min"]:
+                    raise ParameterError(f"parameter {name} = {value!r} is below its minimum {meta['min']}")
+                if "max" in meta and v > meta["max"]:
+                    raise ParameterError(f"parameter {name} = {value!r} is above its maximum {meta['max']}")
+        if "choices" in meta and value not in meta["choices"]:
+            raise ParameterError(f"parameter {name} = {value!r} is not one of {list(meta['choices'])}")
+
+
+def describe(f: dataclasses.Field, kind: type, name: str) -> ParameterDescriptor:
+    """The ParameterDescriptor of one field: description (doc + choices), type, range, read-only flag."""
+    meta = f.metadata
+    text = str(meta.get("doc", ""))
+    if "choices" in meta:
+        text += f" One of: {', '.join(map(str, meta['choices']))}."
+    desc = ParameterDescriptor(name=name, type=_PTYPES[kind], description=text,
+                               read_only=bool(meta.get("read_only", False)))
+    if "choices" in meta:
+        desc.additional_constraints = f"one of {list(meta['choices'])}"
+    has_range = "min" in meta or "max" in meta
+    if kind is float and has_range:
+        lo, hi = float(meta.get("min", -math.inf)), float(meta.get("max", math.inf))
+        desc.floating_point_range = [FloatingPointRange(from_value=lo, to_value=hi, step=0.0)]
+    elif kind is int and has_range:
+        desc.integer_range = [IntegerRange(
+            from_value=int(meta.get("min", INT64_MIN)), to_value=int(meta.get("max", INT64_MAX)), step=0)]
+    return desc
+
+
+def _build(cls: type[P], values: dict[str, Any], prefix: str) -> P:
+    """Instance of cls from field values, validated by metadata and by its own `validate()`."""
+    try:
+        params = cls(**values)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"parameters {prefix or cls.__name__} cannot be built: {exc}") from exc
+    check_metadata(params, prefix)
+    validate = getattr(params, "validate", None)
+    if callable(validate):
+        try:
+            validate()
+        except ParameterError:
+            raise
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"parameters {prefix or cls.__name__} are invalid: {exc}") from exc
+    return params
+
+
+def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
+                    on_change: Callable[[P], None] | None = None) -> P:
+    """Declare every field of the dataclass `cls` as `<prefix><field>`, read and validate the values.
+
+    Overrides from `--params-file` / `--ros-args -p` apply at declaration. A wrong type, a value out of
+    range or a failing `validate()` raises `ParameterError` naming the parameter and the value. After
+    start-up, a runtime change is rejected with that sentence as the reason; an accepted change calls
+    `on_change(new_instance)` after the values are set.
+    """
+    if not dataclasses.is_dataclass(cls):
+        raise ParameterError(f"{cls!r} is not a parameter dataclass")
+    hints = typing.get_type_hints(cls)
+    fields = {prefix + f.name: f for f in dataclasses.fields(cls)}
+    kinds = {name: _base_type(hints[f.name]) for name, f in fields.items()}
+    values: dict[str, Any] = {}
+    for name, f in fields.items():
+        kind = kinds[name]
+        default = _coerce(kind, name, _default(f))
+        desc = describe(f, kind, name)
+        try:
+            if kind is list and not default:
+                # An empty list has no inferable type: declare by type, then fill in the empty default.
+                ptype = Parameter.Type.DOUBLE_ARRAY
+                declared = node.declare_parameter(name, ptype, desc).value
+                if declared is None and not desc.read_only:
+                    node.set_parameters([Parameter(name, ptype, [])])
+                declared = [] if declared is None else declared
+            else:
+                declared = node.declare_parameter(name, default, desc).value
+        except (InvalidParameterTypeException, InvalidParameterValueException, ParameterException) as exc:
+            raise ParameterError(f"parameter {name} is invalid: {exc}") from exc
+        values[f.name] = _coerce(kind, name, declared)
+    current = _build(cls, values, prefix)
+
+    def current_values() -> dict[str, Any]:
+        return {f.name: _coerce(kinds[n], n, node.get_parameter(n).value) for n, f in fields.items()}
+
+    def on_set(params: list[Parameter]) -> SetParametersResult:
+        mine = [p for p in params if p.name in fields]
+        if not mine:
+            return SetParametersResult(successful=True)
+        try:
+            candidate = current_values()
+            for p in mine:
+                candidate[fields[p.name].name] = _coerce(kinds[p.name], p.name, p.value)
+            _build(cls, candidate, prefix)
+        except ParameterError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        return SetParametersResult(successful=True)
+
+    def post_set(params: list[Parameter]) -> None:
+        if on_change is not None and any(p.name in fields for p in params):
+            on_change(_build(cls, current_values(), prefix))
+
+    node.add_on_set_parameters_callback(on_set)
+    node.add_post_set_parameters_callback(post_set)
+    return current

@@ -1,0 +1,221 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`scene_camera`: a simulated SWIR camera on the pan-tilt head, rendering the synthetic world at its pose."""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PolygonStamped
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, qos_profile_sensor_data
+from sensor_msgs.msg import CameraInfo, Image, JointState
+from std_msgs.msg import Header
+from std_srvs.srv import Trigger
+
+from msg_adapters.errors import MessageError
+from msg_adapters.geometry import box_to_polygon
+from msg_adapters.image import numpy_to_image
+from msg_adapters.joint_state import joint_state_to_sample
+from msg_adapters.stamps import header as make_header
+from swir_tracker_ros.demo.world import SceneClock, build_scene, scene_names
+from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.nodes.ros_params import bind_parameters
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.world import Truth
+
+GROUND_TRUTH_STATE = "/ground_truth/state"
+GROUND_TRUTH_STATUS = "swir_tracker/ground_truth"
+GT_KEYS = ("scene_time", "in_view", "visible", "occlusion", "occluded", "pan_error", "tilt_error",
+           "head_pan", "head_tilt", "running")
+
+
+@dataclass
+class SceneCameraParams:
+    """Parameters of the `scene_camera` node (params/scene_camera.yaml)."""
+
+    scene: str = field(default="demo", metadata={
+        "doc": "world to render: 'demo' (the closed-loop demo scene) or a harness scenario name"})
+    seed: int = field(default=7, metadata={"doc": "scene seed (same seed, same scene)", "min": 0,
+                                           "max": 2**31 - 1})
+    width: int = field(default=576, metadata={"doc": "image width, pixels", "min": 16, "max": 4096})
+    height: int = field(default=504, metadata={"doc": "image height, pixels", "min": 16, "max": 4096})
+    fps: float = field(default=25.0, metadata={"doc": "frame rate, Hz", "min": 1.0, "max": 200.0})
+    hfov_deg: float = field(default=8.0, metadata={"doc": "horizontal field of view, degrees (square pixels)",
+                                                   "min": 0.5, "max": 120.0})
+    bits: int = field(default=16, metadata={"doc": "sensor bit depth; 8 publishes mono8, else mono16",
+                                            "choices": (8, 10, 12, 14, 16)})
+    autostart: bool = field(default=True, metadata={
+        "doc": "start the scene clock with the first frame; false: hold t = 0 until /scene/start is called"})
+    duration_s: float = field(default=0.0, metadata={
+        "doc": "scene length, s; the clock holds at the end (0: the scene's own length)", "min": 0.0,
+        "max": 3600.0})
+    target_id: int = field(default=1, metadata={"doc": "identity of the pedestrian on /ground_truth/*",
+                                                "min": 0, "max": 1_000_000})
+    frame_id: str = field(default="camera_optical_frame", metadata={"doc": "header frame_id of the outputs"})
+    initial_pan_deg: float = field(default=0.0, metadata={"doc": "pan used until the first joint state, deg",
+                                                          "min": -360.0, "max": 360.0})
+    initial_tilt_deg: float = field(default=0.0, metadata={
+        "doc": "tilt used until the first joint state, deg", "min": -90.0, "max": 90.0})
+    extrapolate_s: float = field(default=0.2, metadata={
+        "doc": "extrapolate the last joint state with its velocity up to this age, s (0: hold)",
+        "min": 0.0, "max": 2.0})
+
+    def validate(self) -> SceneCameraParams:
+        if self.scene not in scene_names():
+            raise ParameterError(f"parameter scene = {self.scene!r} is not one of {scene_names()}")
+        if self.width % 2 or self.height % 2:
+            raise ParameterError(f"width x height must be even, got {self.width}x{self.height}")
+        return self
+
+
+def ground_truth_state_msg(header: Header, scene_time: float, truth: Truth | None, view: CameraView,
+                           running: bool) -> DiagnosticArray:
+    """/ground_truth/state: one `swir_tracker/ground_truth` status with the values of `GT_KEYS`.
+
+    pan_error / tilt_error are the exact angles of the target's centre from the optical axis in the
+    convention of /track/pan_tilt_error (azimuth - pan, elevation - tilt; NaN when the target is not
+    in view), head_pan / head_tilt the pose this frame was rendered at (rad).
+    """
+    in_view = truth is not None and truth.in_view
+    values = {
+        "scene_time": scene_time,
+        "in_view": 1.0 if in_view else 0.0,
+        "visible": truth.visible_fraction if in_view else 0.0,
+        "occlusion": truth.occlusion if in_view else 0.0,
+        "occluded": 1.0 if in_view and truth.occluded else 0.0,
+        "pan_error": truth.azimuth - view.pan if truth is not None else math.nan,
+        "tilt_error": truth.elevation - view.tilt if truth is not None else math.nan,
+        "head_pan": view.pan,
+        "head_tilt": view.tilt,
+        "running": 1.0 if running else 0.0,
+    }
+    status = DiagnosticStatus(level=DiagnosticStatus.OK, name=GROUND_TRUTH_STATUS,
+                              message="in view" if in_view else "absent", hardware_id="scene_camera",
+                              values=[KeyValue(key=k, value=repr(float(values[k]))) for k in GT_KEYS])
+    return DiagnosticArray(header=header, status=[status])
+
+
+def ground_truth_state_values(msg: DiagnosticArray) -> dict[str, float] | None:
+    """The `GT_KEYS` values of a /ground_truth/state message; None when it has no ground-truth status."""
+    for status in msg.status:
+        if status.name == GROUND_TRUTH_STATUS:
+            raw = {kv.key: kv.value for kv in status.values}
+            try:
+                return {k: float(raw[k]) for k in GT_KEYS}
+            except (KeyError, ValueError) as exc:
+                raise MessageError(f"{GROUND_TRUTH_STATUS} values are incomplete or not numbers ({exc})"
+                                   ) from exc
+    return None
+
+
+def camera_info_msg(view: CameraView, header: Header) -> CameraInfo:
+    """CameraInfo of the ideal pinhole view: K from the FOV, zero distortion, P = [K | 0]."""
+    info = view.camera_info()
+    k = [float(v) for v in info["k"]]
+    return CameraInfo(header=header, width=view.width, height=view.height,
+                      distortion_model=str(info["distortion_model"]), d=[float(v) for v in info["d"]], k=k,
+                      r=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+                      p=[k[0], 0.0, k[2], 0.0, 0.0, k[4], k[5], 0.0, 0.0, 0.0, 1.0, 0.0])
+
+
+class SceneCameraNode(Node):
+    """Renders one frame per timer tick at the latest (extrapolated) head pose and publishes it."""
+
+    def __init__(self) -> None:
+        super().__init__("scene_camera")
+        self.p = bind_parameters(self, SceneCameraParams)
+        p = self.p
+        self.scene = build_scene(p.scene, p.seed, bits=p.bits, fps=p.fps)
+        duration = p.duration_s or self.scene.duration_s
+        self.clock = SceneClock(duration, started_at=None)
+        self.pose = (math.radians(p.initial_pan_deg), math.radians(p.initial_tilt_deg), 0.0, 0.0, -math.inf)
+        self.frames = 0
+        self.image_pub = self.create_publisher(Image, "/camera/image_raw", qos_profile_sensor_data)
+        self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", qos_profile_sensor_data)
+        self.gt_pub = self.create_publisher(PolygonStamped, "/ground_truth/box", QoSProfile(depth=10))
+        self.gt_state_pub = self.create_publisher(DiagnosticArray, GROUND_TRUTH_STATE, QoSProfile(depth=10))
+        self.create_subscription(JointState, "/positioner/joint_states", self._on_joints, 10)
+        self.create_service(Trigger, "/scene/start", self._on_start)
+        self.timer = self.create_timer(1.0 / p.fps, self._tick)
+        self.get_logger().info(
+            f"scene {p.scene!r} seed {p.seed}: {p.width}x{p.height} {p.bits}-bit at {p.fps:g} Hz, "
+            f"hfov {p.hfov_deg:g} deg, {duration:g} s, "
+            f"{'autostart' if p.autostart else 'waits for /scene/start'}")
+
+    def _on_joints(self, msg: JointState) -> None:
+        try:
+            s = joint_state_to_sample(msg)
+        except MessageError as exc:
+            self.get_logger().warning(f"/positioner/joint_states: {exc}", throttle_duration_sec=5.0)
+            return
+        self.pose = (s.pan, s.tilt, s.pan_velocity, s.tilt_velocity, time.time())
+
+    def _on_start(self, _req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
+        started = self.clock.start(time.time())
+        resp.success = True
+        resp.message = f"scene clock started at {started:.6f}"
+        self.get_logger().info(resp.message)
+        return resp
+
+    def head_view(self, now: float) -> CameraView:
+        """The camera view at `now`: last joint state moved on by its velocity for at most extrapolate_s."""
+        pan, tilt, v_pan, v_tilt, at = self.pose
+        age = min(max(now - at, 0.0), self.p.extrapolate_s) if math.isfinite(at) else 0.0
+        return CameraView(pan + v_pan * age, tilt + v_tilt * age, self.p.hfov_deg, self.p.width,
+                          self.p.height)
+
+    def _tick(self) -> None:
+        if not self.context.ok():
+            return  # shutting down (SIGINT): publishing would fail on the invalid context
+        now = time.time()
+        if self.p.autostart and not self.clock.running:
+            self.clock.start(now)
+        t = self.clock.time(now)
+        view = self.head_view(now)
+        frame, truths = self.scene.world.render(t, view)
+        target = next((tr for tr in truths if tr.id == self.p.target_id), None)
+        hdr = make_header(now, self.p.frame_id)
+        self.image_pub.publish(numpy_to_image(frame, hdr, "mono8" if self.p.bits == 8 else "mono16"))
+        self.info_pub.publish(camera_info_msg(view, hdr))
+        in_view = target is not None and target.in_view
+        self.gt_pub.publish(box_to_polygon(target.box if in_view else None, hdr))
+        self.gt_state_pub.publish(ground_truth_state_msg(hdr, t, target, view, self.clock.running))
+        self.frames += 1
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args)
+    try:
+        node = SceneCameraNode()
+    except ParameterError as exc:
+        print(f"scene_camera: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        rclpy.try_shutdown()
+        return 0
+    except Exception:
+        if rclpy.ok():
+            raise
+        return 0  # SIGINT arrived while the node was being built
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception:
+        if node.context.ok():
+            raise  # a real error; otherwise a callback raced with the SIGINT shutdown
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

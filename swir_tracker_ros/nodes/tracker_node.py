@@ -1,0 +1,310 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The tracker node: camera image -> msg_adapters -> Tracker.update -> /track/* (docs/tracker_node.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import time
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PolygonStamped, Vector3Stamped
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
+from std_msgs.msg import Header
+from std_srvs.srv import Trigger
+
+from msg_adapters.camera_info import Intrinsics, intrinsics_from_camera_info, intrinsics_from_fov
+from msg_adapters.debug_image import render_debug
+from msg_adapters.diagnostics import OK, STALE, WARN, diagnostic_array, status
+from msg_adapters.errors import MessageError
+from msg_adapters.geometry import box_from_roi, box_to_polygon, ego_shift, pan_tilt_error, pan_tilt_to_msg
+from msg_adapters.image import image_to_numpy
+from msg_adapters.joint_state import joint_state_to_pan_tilt
+from msg_adapters.stamps import stamp_to_seconds
+from msg_adapters.track_state import track_result_to_msg
+from swir_tracker_ros.errors import ParameterError, TrackerError
+from swir_tracker_ros.nodes.ros_params import bind_parameters
+from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
+from swir_tracker_ros.tracker import Tracker, TrackerParams
+from swir_tracker_ros.types import Box, TrackResult, TrackState
+
+NODE_NAME = "tracker"
+DIAG_NAME = "swir_tracker/tracker_node"
+TRACKER_PREFIX = "tracker."
+# Sensor-data QoS with a queue of one: the executor always takes the newest frame, never a backlog.
+IMAGE_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
+SENSOR_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
+OUTPUT_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+DEBUG_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+ACTIVE = (TrackState.TRACKING, TrackState.OCCLUDED)
+
+
+class TrackerNode(Node):
+    """Wraps `Tracker`; owns no algorithm: decode, call the core, publish, keep statistics."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        self.params = bind_parameters(self, TrackerNodeParams, on_change=self._on_node_params)
+        self.tracker_params = bind_parameters(self, TrackerParams, prefix=TRACKER_PREFIX,
+                                              on_change=self._on_tracker_params)
+        self.tracker = Tracker(self.tracker_params)
+        self.stats = FrameStats()
+        self.poses = HeadPoseHistory()
+        self.camera_intr: Intrinsics | None = None
+        self.pending_init: Box | None = Box(*self.params.init_box) if self.params.init_box else None
+        self.last_box: Box | None = None
+        self.last_result: TrackResult | None = None
+        self.last_stamp = 0.0
+        self.frame_key: tuple | None = None
+        self.prev_pose: tuple[float, float] | None = None
+        self.window_start = time.monotonic()
+        p = self.params
+        self.pub_box = self.create_publisher(PolygonStamped, "/track/box", OUTPUT_QOS)
+        self.pub_error = self.create_publisher(Vector3Stamped, "/track/pan_tilt_error", OUTPUT_QOS)
+        self.pub_state = self.create_publisher(DiagnosticArray, "/track/state", OUTPUT_QOS)
+        self.pub_debug = self.create_publisher(Image, "/track/debug_image", DEBUG_QOS)
+        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
+        guard = self._guard
+        self.create_subscription(Image, p.image_topic, guard(self._on_image), IMAGE_QOS)
+        self.create_subscription(CameraInfo, p.camera_info_topic, guard(self._on_camera_info), SENSOR_QOS)
+        self.create_subscription(JointState, p.joint_states_topic, guard(self._on_joint_state), SENSOR_QOS)
+        self.create_subscription(RegionOfInterest, "/track/init", guard(self._on_init), OUTPUT_QOS)
+        self.create_service(Trigger, "/track/cancel", self._on_cancel)
+        self.diag_timer = self.create_timer(p.diagnostics_period_s, self._guard(self._publish_diagnostics))
+        self.get_logger().info(f"tracking {p.image_topic} with {self.tracker_params.pipeline}/"
+                               f"{self.tracker_params.variant}; init box: {p.init_box or 'none'}")
+
+    # ------------------------------------------------------------------ callbacks
+    def _guard(self, fn):
+        """Wrap a callback so that no exception escapes into the executor (logged, counted, throttled)."""
+        def wrapped(*args):
+            try:
+                fn(*args)
+            except Exception as exc:  # a callback must never take the node down
+                self.stats.errors += 1
+                self.get_logger().error(f"{fn.__name__} failed: {type(exc).__name__}: {exc}",
+                                        throttle_duration_sec=self.params.warn_throttle_s)
+        return wrapped
+
+    def _warn(self, text: str) -> None:
+        self.get_logger().warning(text, throttle_duration_sec=self.params.warn_throttle_s)
+
+    def _on_image(self, msg: Image) -> None:
+        t_recv = time.perf_counter()
+        self.stats.received += 1
+        stamp = stamp_to_seconds(msg.header.stamp)
+        if self._is_stale(stamp):
+            self.stats.stale += 1
+            return
+        try:
+            frame = image_to_numpy(msg)
+        except MessageError as exc:
+            self.stats.malformed += 1
+            self._warn(f"dropped a malformed image: {exc}")
+            return
+        self.stats.frame_stamp(stamp)
+        self.last_stamp = stamp
+        pixels = frame.pixels
+        height, width = pixels.shape[:2]
+        self._check_format(pixels)
+        intr = self._intrinsics(width, height)
+        shift = self._ego_shift(stamp, intr)
+        hint = {"bit_depth": self.params.bit_depth or frame.bit_depth} if pixels.dtype.itemsize == 2 else {}
+        t_core = time.perf_counter()
+        result = self._track(pixels, shift, hint)
+        core_ms = (time.perf_counter() - t_core) * 1e3
+        self._publish(msg.header, result, intr)
+        if self.pub_debug.get_subscription_count() > 0:
+            self.pub_debug.publish(render_debug(pixels, result, msg.header))
+        now = time.perf_counter()
+        self.stats.processed += 1
+        self.stats.latency_ms.append((now - t_recv) * 1e3)
+        self.stats.core_ms.append(core_ms)
+        if stamp > 0:
+            self.stats.age_ms.append((self.get_clock().now().nanoseconds * 1e-9 - stamp) * 1e3)
+
+    def _on_camera_info(self, msg: CameraInfo) -> None:
+        try:
+            self.camera_intr = intrinsics_from_camera_info(msg)
+        except MessageError as exc:
+            self._warn(f"ignoring CameraInfo, using the FOV fallback: {exc}")
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            pan, tilt, stamp = joint_state_to_pan_tilt(msg)
+        except MessageError as exc:
+            self._warn(f"ignoring a joint state: {exc}")
+            return
+        self.poses.add(stamp, pan, tilt)
+
+    def _on_init(self, msg: RegionOfInterest) -> None:
+        try:
+            self.pending_init = box_from_roi(msg)
+        except MessageError as exc:
+            self._warn(f"ignoring /track/init: {exc}")
+            return
+        self.get_logger().info(f"target selected: {self.pending_init.as_tuple()} (starts on the next frame)")
+
+    def _on_cancel(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        was = self.tracker.state.value
+        self.tracker.reset()
+        self.pending_init = None
+        self.last_box = None
+        self.last_result = None
+        response.success = True
+        response.message = f"tracking cancelled (state was {was})"
+        self.get_logger().info(response.message)
+        return response
+
+    def _on_node_params(self, params: TrackerNodeParams) -> None:
+        if params.init_box and params.init_box != self.params.init_box:
+            self.pending_init = Box(*params.init_box)
+        self.params = params
+
+    def _on_tracker_params(self, params: TrackerParams) -> None:
+        """New core parameters: a fresh core, re-initialised on the last box at the next frame."""
+        self.tracker_params = params
+        self.tracker = Tracker(params)
+        if self.pending_init is None and self.last_box is not None and self.last_result is not None \
+                and self.last_result.state in ACTIVE:
+            self.pending_init = self.last_box
+        self.get_logger().info("tracker parameters changed; core restarted")
+
+    # ------------------------------------------------------------------ per-frame pieces
+    def _is_stale(self, stamp: float) -> bool:
+        """Older than (or equal to) the last frame, or older than max_frame_age_s on the node clock.
+
+        A jump back by more than a second is a restarted source (bag loop), not a stale frame.
+        """
+        if stamp > 0 and self.last_stamp > 0 and self.last_stamp - 1.0 < stamp <= self.last_stamp:
+            return True
+        max_age = self.params.max_frame_age_s
+        return max_age > 0 and stamp > 0 and self.get_clock().now().nanoseconds * 1e-9 - stamp > max_age
+
+    def _check_format(self, pixels) -> None:
+        """On a size or pixel-format change: restart the core on the last box scaled to the new size."""
+        key = (pixels.shape, pixels.dtype.str)
+        old, self.frame_key = self.frame_key, key
+        if old is None or old == key:
+            return
+        (oh, ow), (nh, nw) = old[0][:2], key[0][:2]
+        was_active = self.tracker.state in ACTIVE and self.last_box is not None
+        self.tracker.reset()
+        self.prev_pose = None
+        if self.pending_init is not None:
+            self.pending_init = _scale_box(self.pending_init, nw / ow, nh / oh)
+        elif was_active:
+            self.pending_init = _scale_box(self.last_box, nw / ow, nh / oh)
+        self._warn(f"image format changed from {old} to {key}; tracker re-initialised"
+                   + (f" on {self.pending_init.as_tuple()}" if self.pending_init else ""))
+
+    def _intrinsics(self, width: int, height: int) -> Intrinsics:
+        if self.params.use_camera_info and self.camera_intr is not None:
+            return self.camera_intr.scaled_to(width, height)
+        return intrinsics_from_fov(width, height, self.params.fov_h_deg, self.params.fov_v_deg)
+
+    def _ego_shift(self, stamp: float, intr: Intrinsics) -> tuple[float, float]:
+        """Image shift caused by the head since the previous frame (head pose interpolated at the stamp)."""
+        pose = self.poses.at(stamp)
+        prev, self.prev_pose = self.prev_pose, pose
+        if not self.params.ego_motion_compensation or pose is None or prev is None:
+            return (0.0, 0.0)
+        return ego_shift(pose[0] - prev[0], pose[1] - prev[1], intr)
+
+    def _track(self, pixels, shift: tuple[float, float], hint: dict) -> TrackResult | None:
+        if self.pending_init is not None:
+            box, self.pending_init = self.pending_init, None
+            fresh = Tracker(self.tracker_params)  # a rejected box leaves the current track running
+            try:
+                fresh.init(pixels, box, **hint)
+            except TrackerError as exc:
+                self._warn(f"cannot start tracking {box.as_tuple()}: {exc}")
+            else:
+                self.tracker = fresh
+                result = TrackResult(box=box, state=TrackState.TRACKING, measured=True)
+                self.last_result, self.last_box = result, box
+                return result
+        if self.tracker.state is TrackState.IDLE:
+            self.last_result = None
+            return None
+        else:
+            result = self.tracker.update(pixels, ego_shift=shift, **hint)
+        self.last_result = result
+        if result.state in ACTIVE:
+            self.last_box = result.box
+        return result
+
+    def _publish(self, header: Header, result: TrackResult | None, intr: Intrinsics) -> None:
+        if result is None:
+            result = TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
+        active = result.state in ACTIVE and result.box.is_finite()
+        self.pub_box.publish(box_to_polygon(result.box if active else None, header))
+        if active:
+            pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
+            self.pub_error.publish(pan_tilt_to_msg(pan, tilt, header))
+        self.pub_state.publish(track_result_to_msg(result, header))
+
+    def _publish_diagnostics(self) -> None:
+        now = time.monotonic()
+        values, trouble = self.stats.report(now - self.window_start)
+        self.window_start = now
+        received = values["window_received"]
+        if received == 0:
+            level, text = STALE, f"no images on {self.params.image_topic}"
+        elif trouble:
+            level, text = WARN, "frames dropped or callback errors in the last period"
+        else:
+            level, text = OK, "ok"
+        state = self.last_result.state.value if self.last_result else TrackState.IDLE.value
+        values = {"state": state, "intrinsics": "camera_info" if self.params.use_camera_info and
+                  self.camera_intr is not None else "fov", **values}
+        header = Header(stamp=self.get_clock().now().to_msg())
+        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values, NODE_NAME)]))
+
+
+def _scale_box(box: Box, sx: float, sy: float) -> Box:
+    return Box(box.x * sx, box.y * sy, box.w * sx, box.h * sy)
+
+
+def usage() -> str:
+    """`tracker --help`: how to start the node and every parameter with its default."""
+    lines = ["usage: tracker [--ros-args --params-file params/tracker.yaml -p name:=value ...]",
+             "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
+    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
+        for f in dataclasses.fields(cls):
+            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            lines.append(f"  {prefix}{f.name} (default {default!r}): {f.metadata.get('doc', '')}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Console entry point `tracker`: spin until SIGINT/SIGTERM; exit 2 on a bad parameter."""
+    args = list(sys.argv if argv is None else argv)
+    user_args = rclpy.utilities.remove_ros_args(args)[1:]
+    if "-h" in user_args or "--help" in user_args:
+        print(usage())
+        return 0
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = TrackerNode()
+        rclpy.spin(node)
+    except ParameterError as exc:
+        rclpy.logging.get_logger(NODE_NAME).error(f"bad parameter: {exc}")
+        code = 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,142 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Tracker-node parameters and its small bookkeeping helpers (frame statistics, head-pose history)."""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swir_tracker_ros.errors import ParameterError
+
+
+@dataclass
+class TrackerNodeParams:
+    """Node-only parameters (the tracking core's own parameters are bound under `tracker.`)."""
+
+    image_topic: str = field(default="/camera/image_raw", metadata={
+        "doc": "Input sensor_msgs/Image topic (sensor-data QoS, depth 1).", "read_only": True})
+    camera_info_topic: str = field(default="/camera/camera_info", metadata={
+        "doc": "Optional sensor_msgs/CameraInfo topic; its K gives the focal lengths.", "read_only": True})
+    joint_states_topic: str = field(default="/positioner/joint_states", metadata={
+        "doc": "sensor_msgs/JointState of the head (joints pan, tilt in rad) for ego-motion.",
+        "read_only": True})
+    use_camera_info: bool = field(default=True, metadata={
+        "doc": "Use CameraInfo intrinsics when received; otherwise (or when false) the FOV fallback."})
+    fov_h_deg: float = field(default=8.0, metadata={
+        "doc": "Horizontal field of view (deg) for the pinhole fallback without CameraInfo.",
+        "min": 0.1, "max": 179.0})
+    fov_v_deg: float = field(default=0.0, metadata={
+        "doc": "Vertical field of view (deg) for the fallback; 0 means square pixels (fy = fx).",
+        "min": 0.0, "max": 179.0})
+    init_box: list[float] = field(default_factory=list, metadata={
+        "doc": "Box x, y, w, h (full-resolution pixels) that starts tracking on the next frame; [] = none."})
+    bit_depth: int = field(default=0, metadata={
+        "doc": "Significant bits of 16-bit images (10, 12, 14); 0 = the full 16-bit container.",
+        "min": 0, "max": 16})
+    ego_motion_compensation: bool = field(default=True, metadata={
+        "doc": "Shift the core's prediction by the image motion the head caused since the previous frame."})
+    max_frame_age_s: float = field(default=0.0, metadata={
+        "doc": "Drop frames whose header stamp is older than this against the node clock; 0 = no limit.",
+        "min": 0.0, "max": 60.0})
+    diagnostics_period_s: float = field(default=1.0, metadata={
+        "doc": "Period of the /diagnostics report (rate, latency, drops).", "min": 0.1, "max": 60.0})
+    warn_throttle_s: float = field(default=5.0, metadata={
+        "doc": "Minimum interval between repeated warnings about bad input.", "min": 0.0, "max": 3600.0})
+
+    def validate(self) -> None:
+        if self.init_box:
+            if len(self.init_box) != 4:
+                raise ParameterError(f"parameter init_box must be [] or x, y, w, h; got {self.init_box}")
+            if not (self.init_box[2] > 0 and self.init_box[3] > 0):
+                raise ParameterError(f"parameter init_box needs a positive w and h; got {self.init_box}")
+        if self.bit_depth not in (0, 8, 10, 12, 14, 16):
+            raise ParameterError(f"parameter bit_depth must be 0, 8, 10, 12, 14 or 16; got {self.bit_depth}")
+
+
+class HeadPoseHistory:
+    """Recent (stamp, pan, tilt) samples; `at(t)` interpolates linearly, clamping to the ends."""
+
+    def __init__(self, maxlen: int = 64) -> None:
+        self.samples: deque[tuple[float, float, float]] = deque(maxlen=maxlen)
+
+    def add(self, stamp: float, pan: float, tilt: float) -> None:
+        if self.samples and stamp < self.samples[-1][0]:
+            self.samples.clear()  # time went backwards (bag loop, restart): start over
+        self.samples.append((stamp, pan, tilt))
+
+    def at(self, stamp: float) -> tuple[float, float] | None:
+        if not self.samples:
+            return None
+        times = [s[0] for s in self.samples]
+        i = bisect.bisect_left(times, stamp)
+        if i == 0:
+            return self.samples[0][1:]
+        if i >= len(times):
+            return self.samples[-1][1:]
+        (t0, p0, q0), (t1, p1, q1) = self.samples[i - 1], self.samples[i]
+        a = (stamp - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return p0 + a * (p1 - p0), q0 + a * (q1 - q0)
+
+
+@dataclass
+class FrameStats:
+    """Per-window counters for /diagnostics; `report()` returns the window's figures and starts a new one."""
+
+    received: int = 0
+    processed: int = 0
+    malformed: int = 0
+    stale: int = 0
+    skipped: int = 0  # frames missing between consecutive stamps (overwritten in the depth-1 queue)
+    errors: int = 0
+    latency_ms: list[float] = field(default_factory=list)  # receive -> last publish, in the node
+    core_ms: list[float] = field(default_factory=list)
+    age_ms: list[float] = field(default_factory=list)  # header stamp -> publish, on the node clock
+    totals: dict[str, int] = field(default_factory=dict)
+    _last_stamp: float = 0.0
+    _periods: deque = field(default_factory=lambda: deque(maxlen=50))
+
+    def frame_stamp(self, stamp: float) -> None:
+        """Count frames skipped between stamps, from the median frame period of recent frames.
+
+        A gap of more than 1.5 periods counts round(gap / period) - 1 skipped frames; a gap beyond
+        10 periods is a pause of the source, not skipping, and is neither counted nor learnt.
+        """
+        if self._last_stamp > 0 and stamp > self._last_stamp:
+            dt = stamp - self._last_stamp
+            period = float(np.median(self._periods)) if len(self._periods) >= 5 else 0.0
+            if period > 0 and dt > 10 * period:
+                dt = 0.0
+            elif period > 0 and dt > 1.5 * period:
+                self.skipped += round(dt / period) - 1
+            if dt > 0:
+                self._periods.append(dt)
+        self._last_stamp = stamp
+
+    def report(self, window_s: float) -> tuple[dict[str, object], bool]:
+        """(values, trouble) for the window just ended; trouble means drops or errors happened in it."""
+        def pct(xs: list[float], q: float) -> float:
+            return float(np.percentile(xs, q)) if xs else math.nan
+
+        counts = {"received": self.received, "processed": self.processed,
+                  "dropped_malformed": self.malformed, "dropped_stale": self.stale,
+                  "dropped_skipped": self.skipped, "callback_errors": self.errors}
+        for k, v in counts.items():
+            self.totals[k] = self.totals.get(k, 0) + v
+        values: dict[str, object] = {
+            "frame_rate_hz": self.processed / window_s if window_s > 0 else 0.0,
+            "latency_ms_p50": pct(self.latency_ms, 50), "latency_ms_p99": pct(self.latency_ms, 99),
+            "latency_ms_max": max(self.latency_ms, default=math.nan),
+            "core_ms_mean": float(np.mean(self.core_ms)) if self.core_ms else math.nan,
+            "core_ms_max": max(self.core_ms, default=math.nan),
+            "stamp_age_ms_p50": pct(self.age_ms, 50),
+            **{f"window_{k}": v for k, v in counts.items()},
+            **{f"total_{k}": v for k, v in self.totals.items()},
+        }
+        trouble = bool(self.malformed or self.skipped or self.errors or self.stale)
+        self.received = self.processed = self.malformed = self.stale = self.skipped = self.errors = 0
+        self.latency_ms, self.core_ms, self.age_ms = [], [], []
+        return values, trouble

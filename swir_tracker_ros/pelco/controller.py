@@ -1,0 +1,133 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Angular error (rad) -> Pelco-D pan/tilt speed bytes: P/PI law, deadband, speed table, slew, limits."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from swir_tracker_ros.pelco import codec
+from swir_tracker_ros.pelco.params import PositionerParams
+from swir_tracker_ros.pelco.speed_table import SpeedTable
+
+
+@dataclass(frozen=True)
+class MotionCommand:
+    """One pan/tilt move in Pelco terms: dir +1 = right / up, -1 = left / down, 0 = none."""
+
+    pan_dir: int = 0
+    pan_speed: int = 0
+    tilt_dir: int = 0
+    tilt_speed: int = 0
+
+    @property
+    def is_stop(self) -> bool:
+        return self.pan_dir == 0 and self.tilt_dir == 0
+
+    def to_bytes(self, address: int) -> bytes:
+        return codec.pan_tilt(address, self.pan_dir, self.pan_speed, self.tilt_dir, self.tilt_speed)
+
+
+STOP = MotionCommand()
+
+
+def proportional_integral(error: float, integral: float, kp: float, ki: float) -> float:
+    """Demanded joint rate, rad/s: omega = kp * e + ki * integral(e dt)."""
+    return kp * error + ki * integral
+
+
+def slew(previous: float, target: float, max_accel: float, dt: float) -> float:
+    """Move `previous` toward `target` by at most max_accel * dt; a zero target (stop) is never delayed."""
+    if target == 0.0 or max_accel <= 0.0:
+        return target
+    step = max_accel * dt
+    return previous + min(max(target - previous, -step), step)
+
+
+def limit_guard(omega: float, position: float | None, lo: float, hi: float, lookahead: float) -> float:
+    """Rate clipped so that the joint reaches a soft limit no sooner than `lookahead` s from now.
+
+    Toward hi: omega <= (hi - position) / lookahead (0 at or past the limit), symmetric toward lo, so the
+    head slows down on approach instead of hitting the limit at speed. Motion back toward the allowed
+    range is always permitted; an unknown position passes unchanged.
+    """
+    if position is None or omega == 0.0:
+        return omega
+    room = hi - position if omega > 0.0 else position - lo
+    if room <= 0.0:
+        return 0.0
+    if lookahead > 0.0:
+        return math.copysign(min(abs(omega), room / lookahead), omega)
+    return omega
+
+
+class AxisController:
+    """One joint: error (rad, our sign convention) -> (Pelco direction, speed byte)."""
+
+    def __init__(self, table: SpeedTable, *, kp: float, ki: float, integral_limit: float, deadband: float,
+                 min_byte: int, max_byte: int, max_accel: float, invert: bool, lo: float, hi: float,
+                 lookahead: float, positive_pelco_dir: int, turbo: bool = False) -> None:
+        self.table = table
+        self.kp, self.ki, self.integral_limit, self.deadband = kp, ki, integral_limit, deadband
+        self.min_byte, self.max_byte, self.max_accel, self.turbo = min_byte, max_byte, max_accel, turbo
+        self.lo, self.hi, self.lookahead = lo, hi, lookahead
+        # Pelco direction that moves the joint in our positive direction (pan: left = -1, tilt: up = +1).
+        self.positive_dir = -positive_pelco_dir if invert else positive_pelco_dir
+        self.integral = 0.0
+        self.omega = 0.0  # commanded rate after slew, rad/s (our convention)
+
+    def reset(self) -> None:
+        self.integral = 0.0
+        self.omega = 0.0
+
+    def step(self, error: float, dt: float, position: float | None = None,
+             gain: float = 1.0) -> tuple[int, int]:
+        """(pelco_dir, speed_byte) for this control period; (0, 0) inside the deadband or at a limit."""
+        if not math.isfinite(error) or abs(error) < self.deadband or gain <= 0.0:
+            self.reset()
+            return 0, 0
+        if self.ki > 0.0:
+            bound = self.integral_limit / self.ki
+            self.integral = min(max(self.integral + error * dt, -bound), bound)
+        target = gain * proportional_integral(error, self.integral, self.kp, self.ki)
+        target = limit_guard(target, position, self.lo, self.hi, self.lookahead)
+        if target == 0.0:
+            self.reset()
+            return 0, 0
+        self.omega = slew(self.omega, target, self.max_accel, dt)
+        if self.omega * target <= 0.0:  # still reversing through zero: hold still this period
+            return 0, 0
+        dps = math.degrees(abs(self.omega))
+        byte = self.table.byte_for(dps, self.min_byte, self.max_byte)
+        if self.turbo and dps >= 0.5 * (self.table.max_dps + self.table.turbo_dps):
+            byte = codec.TURBO
+        direction = self.positive_dir if self.omega > 0.0 else -self.positive_dir
+        return direction, byte
+
+
+class PanTiltController:
+    """Both joints from one `PositionerParams`."""
+
+    def __init__(self, p: PositionerParams) -> None:
+        xs = tuple(p.speed_table_bytes)
+        common = dict(kp=p.kp, ki=p.ki, integral_limit=p.integral_limit, deadband=p.deadband,
+                      min_byte=p.min_speed_byte, max_byte=p.max_speed_byte, max_accel=p.max_accel,
+                      lookahead=p.limit_lookahead)
+        pan_limited = p.pan_min > -math.pi or p.pan_max < math.pi
+        self.pan = AxisController(
+            SpeedTable(xs, tuple(p.pan_speed_table), p.pan_turbo_speed), invert=p.invert_pan,
+            lo=p.pan_min if pan_limited else -math.inf, hi=p.pan_max if pan_limited else math.inf,
+            positive_pelco_dir=-1, turbo=p.allow_turbo, **common)
+        self.tilt = AxisController(
+            SpeedTable(xs, tuple(p.tilt_speed_table), p.tilt_speed_table[-1]), invert=p.invert_tilt,
+            lo=p.tilt_min, hi=p.tilt_max, positive_pelco_dir=1, **common)
+
+    def reset(self) -> None:
+        self.pan.reset()
+        self.tilt.reset()
+
+    def step(self, pan_error: float, tilt_error: float, dt: float, pan: float | None = None,
+             tilt: float | None = None, gain: float = 1.0) -> MotionCommand:
+        pd, ps = self.pan.step(pan_error, dt, pan, gain)
+        td, ts = self.tilt.step(tilt_error, dt, tilt, gain)
+        return MotionCommand(pd, ps, td, ts)

@@ -1,0 +1,262 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The long-term SWIR tracker: correlation filter + Kalman prediction + re-detection (paper 000, dissertation)."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
+from swir_tracker_ros.core.detector import Detection, FilterBank
+from swir_tracker_ros.core.params import PIPELINES, VARIANTS, TrackerParams
+from swir_tracker_ros.core.windows import grid_windows, scale_windows, search_window
+from swir_tracker_ros.errors import KalmanError, TrackerError
+from swir_tracker_ros.kalman import (
+    DISSERTATION_DCFCA,
+    PAPER000_KCF,
+    AdaptiveNoise,
+    Huber,
+    KalmanFilter,
+    RobustKalmanFilter,
+    dcfca_box_model,
+    kcf_box_model,
+)
+from swir_tracker_ros.types import Box, SearchMode, TrackResult, TrackState
+
+__all__ = ["PIPELINES", "VARIANTS", "Tracker", "TrackerParams"]
+
+_RECOVERABLE = (TrackerError, KalmanError, cv2.error, ValueError, ArithmeticError, np.linalg.LinAlgError)
+
+
+def _as_box(box: object) -> Box:
+    if isinstance(box, Box):
+        return box
+    try:
+        x, y, w, h = (float(v) for v in box)  # type: ignore[union-attr]
+    except (TypeError, ValueError) as exc:
+        raise TrackerError(f"init box must be a Box or (x, y, w, h), got {box!r}") from exc
+    return Box(x, y, w, h)
+
+
+class Tracker:
+    """Single-object tracker; `init(frame, box)` then `update(frame)` once per frame.
+
+    Per frame (paper 000 Fig. 2, dissertation §1.7 pseudo-code): Kalman prediction (+ ego shift),
+    5-scale search at the prediction, failure detection (PSR < 7 for KCF, APCE <= 0.6 mean for DCF-CA),
+    3x3 re-detection grid on failure, robust Kalman update with a peak-adaptive Huber threshold, and a
+    model update only on confident frames. Variant `cf` is the bare correlation filter.
+    """
+
+    def __init__(self, params: TrackerParams | None = None) -> None:
+        self.params = params if params is not None else TrackerParams()
+        self.params.validate()
+        p = self.params
+        self._conditioner = FrameConditioner(ConditioningConfig(
+            stretch=p.stretch, low_percentile=p.stretch_low_percentile, high_percentile=p.stretch_high_percentile,
+            stretch_smoothing=p.stretch_smoothing, dead_pixel_threshold=p.dead_pixel_threshold,
+            deinterlace=p.deinterlace, downscale=p.downscale))
+        self.reset()
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def state(self) -> TrackState:
+        return self._state
+
+    def reset(self) -> None:
+        """Forget the target (state idle)."""
+        self._state = TrackState.IDLE
+        self._conditioner.reset()
+        self._bank: FilterBank | None = None
+        self._kf: KalmanFilter | None = None
+        self._model = None
+        self._noise: AdaptiveNoise | None = None
+        self._box: Box | None = None  # current estimate, conditioned-image pixels
+        self._init_size = (0.0, 0.0)
+        self._frame_shape: tuple[int, ...] = ()
+        self._occluded = 0
+        self._apce_sum = self._apce_n = 0.0
+        self._apce_est_sum = self._apce_est_n = 0.0
+
+    def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
+        """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if either is unusable."""
+        self.reset()
+        box = _as_box(box)
+        if not box.is_valid() or box.w < 1.0 or box.h < 1.0:
+            raise TrackerError(f"init box {box.as_tuple()} must be finite with width and height of at least 1 pixel")
+        if not isinstance(frame, np.ndarray):
+            raise TrackerError(f"frame must be a numpy array, got {type(frame).__name__}")
+        if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
+            raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
+        img = self._conditioner(frame, bit_depth)  # ConditioningError is a TrackerError
+        ih, iw = frame.shape[:2]
+        if not (0.0 <= box.cx < iw and 0.0 <= box.cy < ih):
+            raise TrackerError(f"init box {box.as_tuple()} has its centre outside the {iw}x{ih} image")
+        p = self.params
+        ds = p.downscale
+        b = Box(box.x * ds, box.y * ds, box.w * ds, box.h * ds)
+        self._frame_shape = frame.shape
+        self._init_size = (b.w, b.h)
+        self._bank = FilterBank(p, b.w, b.h)
+        self._bank.initialise(img, b)
+        self._box = b
+        if p.variant != "cf":
+            self._model = kcf_box_model() if p.pipeline == "kcf" else dcfca_box_model(b.w, b.h)
+            if p.variant == "kalman":
+                self._kf = KalmanFilter(self._model)
+            else:
+                method = p.robust_method if p.robust_method != "auto" else ("A4" if p.pipeline == "kcf" else "A2")
+                self._kf = RobustKalmanFilter(self._model, influence=Huber(p.fixed_huber_threshold),
+                                              robust_components=(0, 1), method=method)
+            self._kf.initialize(self._model.state_from_box(b), self._model.P0)
+            if p.variant == "robust_adaptive_r":
+                self._noise = AdaptiveNoise(self._model.R, components=(0, 1))
+        self._state = TrackState.TRACKING
+
+    def update(self, frame: np.ndarray, ego_shift: tuple[float, float] = (0.0, 0.0),
+               bit_depth: int | None = None) -> TrackResult:
+        """Track one frame. Never raises on an ndarray: unusable input gives a `lost` result for this frame."""
+        if self._state is TrackState.IDLE or self._bank is None or self._box is None:
+            return TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
+        if self._state is TrackState.LOST:
+            return self._result(self._box, TrackState.LOST)
+        try:
+            if not isinstance(frame, np.ndarray) or frame.shape[:2] != self._frame_shape[:2]:
+                raise TrackerError("frame size differs from the init frame")
+            if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
+                raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
+            img = self._conditioner(frame, bit_depth)
+            dx, dy = (float(v) for v in ego_shift)
+            if not (math.isfinite(dx) and math.isfinite(dy)):
+                dx = dy = 0.0
+        except (*_RECOVERABLE, TypeError):
+            return self._result(self._box, TrackState.LOST)  # transient: the track itself is kept
+        try:
+            if self.params.variant == "cf":
+                return self._step_cf(img)
+            return self._step(img, dx * self.params.downscale, dy * self.params.downscale)
+        except _RECOVERABLE:
+            self._state = TrackState.LOST
+            return self._result(self._box, TrackState.LOST)
+
+    # ------------------------------------------------------------------ per-frame steps
+    def _step_cf(self, img: np.ndarray) -> TrackResult:
+        """Bare correlation filter: one window at the last position, fixed size, update every frame."""
+        bank, box = self._bank, self._box
+        win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
+        det = bank.detect(img, [win])[0]
+        self._box = Box.from_center(det.cx, det.cy, box.w, box.h)
+        bank.train(img, self._box, bank.learning_rate)
+        return self._result(self._box, TrackState.TRACKING, det=det, measured=True, updated=True, windows=(win,))
+
+    def _step(self, img: np.ndarray, dx: float, dy: float) -> TrackResult:
+        p, bank, kf, model = self.params, self._bank, self._kf, self._model
+        kf.predict()
+        kf.x[0] += dx
+        kf.x[1] += dy
+        pred = model.box_from_state(kf.x)
+        ih, iw = img.shape
+        if not pred.is_valid() or not pred.intersects_image(iw, ih):
+            self._state = TrackState.LOST
+            self._box = pred if pred.is_finite() else self._box
+            return self._result(self._box, TrackState.LOST)
+        pred = self._clamp_size(pred)
+        factors = p.scale_factors()
+        wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
+        dets = bank.detect(img, wins, factors)
+        best = max(range(len(dets)), key=lambda i: dets[i].peak)
+        det = dets[best]
+        failed = self._failure(det)
+        mode = SearchMode.NORMAL
+        shown: tuple[Box, ...] = (wins[len(wins) // 2],)
+        if failed:
+            mode = SearchMode.MULTI_WINDOW
+            grid = grid_windows(wins[len(wins) // 2], p.grid_overlap)
+            others = [g for i, g in enumerate(grid) if i != 4]
+            if p.grid_scale_search:
+                cand = [*dets, *bank.detect(img, [w.scaled(f) for w in others for f in factors],
+                                               [f for _ in others for f in factors])]
+            else:
+                cand = [dets[len(dets) // 2], *bank.detect(img, others)]
+            det = max(cand, key=lambda d: d.peak)
+            shown = tuple(grid)
+        size = (pred.w * det.scale, pred.h * det.scale) if not failed or p.grid_scale_search else (pred.w, pred.h)
+        meas = Box.from_center(det.cx, det.cy, *size)
+        k = self._threshold(det.peak)
+        info = kf.update(model.measurement_from_box(meas), threshold=k)
+        if self._noise is not None and not info.coasted:
+            kf.R = self._noise.push(model.measurement_from_box(meas), kf.x, kf.P, kf.H, used=info.used)
+        out = model.box_from_state(kf.x)
+        if not out.is_valid():
+            raise TrackerError("Kalman posterior box has a non-positive size")
+        self._box = self._clamp_size(out)
+        updated = self._maybe_train(img, det, failed)
+        if failed:
+            self._occluded += 1
+            state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
+        else:
+            self._occluded = 0
+            state = TrackState.TRACKING
+        self._state = state
+        return self._result(self._box, state, det=det, mode=mode, measured=not failed, updated=updated,
+                            windows=shown, threshold=k if k is not None else 0.0)
+
+    # ------------------------------------------------------------------ pieces
+    def _failure(self, det: Detection) -> bool:
+        """Failure detection: PSR < threshold (paper 000) or APCE <= 0.6 x mean APCE (eq. 4.96)."""
+        p = self.params
+        if p.pipeline == "kcf":
+            return det.psr < p.psr_threshold
+        mean = self._apce_sum / self._apce_n if self._apce_n else 0.0
+        occluded = self._apce_n > 0 and det.apce <= p.apce_occlusion_ratio * mean
+        if not occluded:
+            self._apce_sum += det.apce
+            self._apce_n += 1
+        return occluded
+
+    def _threshold(self, peak: float) -> float | None:
+        v = self.params.variant
+        if v == "kalman":
+            return None
+        if v == "robust":
+            return self.params.fixed_huber_threshold
+        return (PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA)(peak)
+
+    def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
+        """Confident-only model update (peak > 0.5, paper 000; APCE gate 0.583 x mean, eq. 4.97); frozen on failure."""
+        p = self.params
+        if failed:
+            return False
+        if p.pipeline == "kcf":
+            ok = det.peak > p.update_peak_threshold
+        else:
+            mean = self._apce_est_sum / self._apce_est_n if self._apce_est_n else 0.0
+            ok = self._apce_est_n == 0 or det.apce > p.apce_update_ratio * mean
+            self._apce_est_sum += det.apce
+            self._apce_est_n += 1
+        if ok:
+            self._bank.train(img, self._box, self._bank.learning_rate)
+        return ok
+
+    def _clamp_size(self, box: Box) -> Box:
+        """Keep the size within [1/4, 4] x the initial size so one bad scale step cannot run away."""
+        w0, h0 = self._init_size
+        w = min(max(box.w, 0.25 * w0), 4.0 * w0)
+        h = min(max(box.h, 0.25 * h0), 4.0 * h0)
+        return Box.from_center(box.cx, box.cy, w, h)
+
+    def _result(self, box: Box, state: TrackState, det: Detection | None = None,
+                mode: SearchMode = SearchMode.NORMAL, measured: bool = False, updated: bool = False,
+                windows: tuple[Box, ...] = (), threshold: float = 0.0) -> TrackResult:
+        inv = 1.0 / self.params.downscale
+
+        def up(b: Box) -> Box:
+            return Box(b.x * inv, b.y * inv, b.w * inv, b.h * inv)
+
+        w0, h0 = self._init_size
+        scale = math.sqrt(box.w * box.h / (w0 * h0)) if w0 > 0 and h0 > 0 and box.is_valid() else 1.0
+        return TrackResult(
+            box=up(box), state=state, peak=det.peak if det else 0.0, psr=det.psr if det else 0.0,
+            apce=det.apce if det else 0.0, huber_threshold=float(threshold), search_mode=mode,
+            measured=measured, scale=scale, model_updated=updated, search_windows=tuple(up(b) for b in windows))

@@ -1,0 +1,246 @@
+# SPDX-License-Identifier: Apache-2.0
+"""TrackerNode in-process: callbacks driven directly, outputs captured (no DDS round trip needed)."""
+
+from __future__ import annotations
+
+import array
+import dataclasses
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+import rclpy
+import yaml
+from conftest import REPO
+from rclpy.context import Context
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
+from std_srvs.srv import Trigger
+
+from msg_adapters.diagnostics import status_values
+from msg_adapters.geometry import box_from_polygon, pan_tilt_error_from_msg
+from msg_adapters.image import numpy_to_image
+from msg_adapters.stamps import header
+from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode
+from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
+from swir_tracker_ros.tracker import TrackerParams
+from swir_tracker_ros.types import TrackState
+
+W, H, TW = 240, 192, 24
+PATCH = np.random.default_rng(3).integers(0, 2, (TW // 4, TW // 4)).repeat(4, 0).repeat(4, 1)
+
+
+def scene(cx: float, cy: float, width: int = W, height: int = H, seed: int = 0) -> np.ndarray:
+    """uint16 frame: smooth noisy background with a high-contrast checker target centred at (cx, cy)."""
+    rng = np.random.default_rng(seed)
+    img = 3000.0 + 400.0 * np.sin(np.arange(width) / 37.0)[None, :] + rng.normal(0, 40, (height, width))
+    x0, y0 = round(cx - TW / 2), round(cy - TW / 2)
+    img[y0:y0 + TW, x0:x0 + TW] += 6000.0 * PATCH
+    return np.clip(img, 0, 65535).astype(np.uint16)
+
+
+@pytest.fixture
+def context() -> Iterator[Context]:
+    ctx = Context()
+    rclpy.init(context=ctx)
+    try:
+        yield ctx
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
+class Capture:
+    def __init__(self, node: TrackerNode) -> None:
+        self.box, self.error, self.state, self.diag = [], [], [], []
+        node.pub_box.publish = self.box.append
+        node.pub_error.publish = self.error.append
+        node.pub_state.publish = self.state.append
+        node.pub_diag.publish = self.diag.append
+
+
+def make(ctx: Context, **params) -> tuple[TrackerNode, Capture]:
+    overrides = [Parameter(k, value=v) for k, v in params.items()]
+    node = TrackerNode(context=ctx, parameter_overrides=overrides)
+    return node, Capture(node)
+
+
+def feed(node: TrackerNode, pixels: np.ndarray, t: float) -> None:
+    node._on_image(numpy_to_image(pixels, header(t, "swir")))
+
+
+def test_tracks_from_init_box_param_and_publishes_with_image_header(context: Context) -> None:
+    node, cap = make(context, init_box=[88.0, 84.0, 24.0, 24.0], fov_h_deg=30.0,
+                     ego_motion_compensation=False)
+    try:
+        for i in range(20):
+            feed(node, scene(100.0 + 2 * i, 96.0, seed=i), 10.0 + 0.04 * i)
+        assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
+        box = box_from_polygon(cap.box[-1])
+        assert abs(box.cx - 138.0) < 3 and abs(box.cy - 96.0) < 3
+        pan, tilt, stamp = pan_tilt_error_from_msg(cap.error[-1])
+        assert stamp == pytest.approx(10.0 + 0.04 * 19)
+        fx = (W / 2) / math.tan(math.radians(15.0))
+        assert pan == pytest.approx(math.atan2(W / 2 - box.cx, fx)) and pan < 0  # target right of centre
+        assert tilt == pytest.approx(math.atan2(H / 2 - box.cy, fx))  # square pixels: fy = fx
+        assert cap.box[-1].header.frame_id == "swir"
+    finally:
+        node.destroy_node()
+
+
+def test_malformed_and_stale_frames_are_counted_not_raised(context: Context) -> None:
+    node, cap = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
+    try:
+        feed(node, scene(100, 96), 1.0)
+        bad = Image(height=H, width=W, encoding="mono16", step=W * 2, data=array.array("B", bytes(10)))
+        bad.header = header(1.1)
+        node._on_image(bad)
+        node._on_image(Image(height=H, width=W, encoding="bogus", step=W * 2, header=header(1.2)))
+        feed(node, scene(100, 96), 0.5)  # older than the last processed frame by < 1 s: stale
+        feed(node, scene(102, 96), 1.3)
+        values, trouble = node.stats.report(1.0)
+        assert values["window_dropped_malformed"] == 2 and values["window_dropped_stale"] == 1
+        assert values["window_processed"] == 2 and trouble
+        assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
+    finally:
+        node.destroy_node()
+
+
+def test_init_topic_cancel_service_and_bad_init(context: Context) -> None:
+    node, cap = make(context)
+    try:
+        feed(node, scene(100, 96), 1.0)
+        assert track_state_from_msg(cap.state[-1]) is TrackState.IDLE and not cap.error
+        node._on_init(RegionOfInterest(x_offset=88, y_offset=84, width=0, height=24))  # rejected: zero width
+        feed(node, scene(100, 96), 1.04)
+        assert track_state_from_msg(cap.state[-1]) is TrackState.IDLE
+        node._on_init(RegionOfInterest(x_offset=88, y_offset=84, width=24, height=24))
+        feed(node, scene(100, 96), 1.08)
+        assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
+        response = node._on_cancel(Trigger.Request(), Trigger.Response())
+        assert response.success and "tracking" in response.message
+        feed(node, scene(100, 96), 1.12)
+        assert track_state_from_msg(cap.state[-1]) is TrackState.IDLE
+        assert box_from_polygon(cap.box[-1]) is None
+        node._on_init(RegionOfInterest(x_offset=5000, y_offset=84, width=24, height=24))  # outside the image
+        feed(node, scene(100, 96), 1.16)
+        assert track_state_from_msg(cap.state[-1]) is TrackState.IDLE
+    finally:
+        node.destroy_node()
+
+
+def test_resolution_change_reinitialises_on_the_scaled_box(context: Context) -> None:
+    node, cap = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
+    try:
+        for i in range(5):
+            feed(node, scene(100, 96, seed=i), 1.0 + 0.04 * i)
+        big = scene(200, 192, width=2 * W, height=2 * H)  # same view at twice the resolution
+        feed(node, big, 2.0)
+        box = box_from_polygon(cap.box[-1])
+        assert abs(box.cx - 200) < 4 and abs(box.w - 48) < 6
+        feed(node, scene(204, 192, width=2 * W, height=2 * H, seed=9), 2.04)
+        assert track_state_from_msg(cap.state[-1]) in (TrackState.TRACKING, TrackState.OCCLUDED)
+        feed(node, scene(100, 96).astype(np.uint8), 2.08)  # bit depth change: also a clean restart
+        assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
+    finally:
+        node.destroy_node()
+
+
+def test_ego_shift_from_joint_states_and_camera_info(context: Context) -> None:
+    node, _ = make(context)
+    try:
+        k = [500.0, 0.0, 120.0, 0.0, 500.0, 96.0, 0.0, 0.0, 1.0]
+        node._on_camera_info(CameraInfo(width=W, height=H, k=k))
+        node._on_camera_info(CameraInfo(width=W, height=H))  # uncalibrated: ignored, previous one kept
+        for t, pan, tilt in ((0.9, 0.0, 0.0), (1.1, 0.02, -0.01)):
+            node._on_joint_state(JointState(header=header(t), name=["tilt", "pan"], position=[tilt, pan]))
+        node._on_joint_state(JointState(header=header(1.2), name=["pan"], position=[0.5]))  # ignored
+        intr = node._intrinsics(W, H)
+        assert intr.fx == 500.0
+        assert node._ego_shift(0.9, intr) == (0.0, 0.0)
+        dx, dy = node._ego_shift(1.0, intr)  # head halfway: pan +0.01 (left), tilt -0.005 (down)
+        assert dx == pytest.approx(500 * math.tan(0.01)) and dy == pytest.approx(500 * math.tan(-0.005))
+    finally:
+        node.destroy_node()
+
+
+def test_runtime_parameter_changes(context: Context) -> None:
+    node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
+    try:
+        feed(node, scene(100, 96), 1.0)
+        assert not node.set_parameters([Parameter("tracker.psr_threshold", value=-1.0)])[0].successful
+        res = node.set_parameters([Parameter("tracker.pipeline", value="nope")])[0]
+        assert not res.successful and "nope" in res.reason
+        assert not node.set_parameters([Parameter("init_box", value=[1.0, 2.0])])[0].successful
+        assert not node.set_parameters([Parameter("image_topic", value="/x")])[0].successful
+        assert node.set_parameters([Parameter("tracker.pipeline", value="dcf_ca")])[0].successful
+        assert node.tracker.params.pipeline == "dcf_ca" and node.pending_init is not None
+        feed(node, scene(100, 96), 1.04)
+        assert node.tracker.state is TrackState.TRACKING
+    finally:
+        node.destroy_node()
+
+
+def test_bad_startup_parameter_raises(context: Context) -> None:
+    with pytest.raises(ParameterError, match="fov_h_deg"):
+        TrackerNode(context=context, parameter_overrides=[Parameter("fov_h_deg", value=500.0)])
+
+
+def test_diagnostics_report(context: Context) -> None:
+    node, cap = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
+    try:
+        node._publish_diagnostics()
+        assert status_values(cap.diag[-1], DIAG_NAME)["window_received"] == "0"
+        assert cap.diag[-1].status[0].level == b"\x03"  # STALE: no images
+        for i in range(6):
+            feed(node, scene(100, 96, seed=i), 1.0 + 0.04 * i)
+        node._publish_diagnostics()
+        values = status_values(cap.diag[-1], DIAG_NAME)
+        assert values["window_processed"] == "6" and float(values["latency_ms_p50"]) > 0
+        assert values["state"] == "tracking"
+    finally:
+        node.destroy_node()
+
+
+def test_frame_stats_counts_skipped_frames_and_head_history() -> None:
+    stats = FrameStats()
+    for i in [*range(10), 12, 13, 100]:  # frames 10 and 11 missing; then a pause
+        stats.frame_stamp(1.0 + 0.04 * i)
+    assert stats.skipped == 2
+    hist = HeadPoseHistory()
+    assert hist.at(1.0) is None
+    hist.add(1.0, 0.0, 0.0)
+    hist.add(2.0, 1.0, -1.0)
+    assert hist.at(1.5) == (0.5, -0.5) and hist.at(0.0) == (0.0, 0.0) and hist.at(9.0) == (1.0, -1.0)
+    hist.add(0.5, 3.0, 3.0)  # time went backwards: history restarts
+    assert hist.at(2.0) == (3.0, 3.0)
+
+
+def test_debug_image_only_with_subscribers(context: Context) -> None:
+    node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
+    debug: list[Image] = []
+    node.pub_debug.publish = debug.append
+    try:
+        feed(node, scene(100, 96), 1.0)
+        assert not debug
+        node.create_subscription(Image, "/track/debug_image", lambda _m: None, 1)
+        assert node.pub_debug.get_subscription_count() == 1
+        feed(node, scene(102, 96), 1.04)
+        assert len(debug) == 1 and debug[0].encoding == "bgr8" and (debug[0].width, debug[0].height) == (W, H)
+        pixels = np.frombuffer(debug[0].data, np.uint8).reshape(H, W, 3)
+        assert (pixels[..., 1] > 200).sum() > 4 * TW  # the green tracking box is drawn
+    finally:
+        node.destroy_node()
+
+
+def test_params_file_lists_every_parameter_with_its_default() -> None:
+    doc = yaml.safe_load((REPO / "params" / "tracker.yaml").read_text())["/**"]["ros__parameters"]
+    core = doc.pop("tracker")
+    for cls, values in ((TrackerNodeParams, doc), (TrackerParams, core)):
+        defaults = {f.name: f.default if f.default is not dataclasses.MISSING else f.default_factory()
+                    for f in dataclasses.fields(cls)}
+        assert set(values) == set(defaults), cls.__name__
+        for name, value in values.items():
+            assert value == pytest.approx(defaults[name]), name
