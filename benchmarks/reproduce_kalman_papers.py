@@ -47,6 +47,14 @@ def run_one(sc: Scenario, deltas: tuple[float, ...], runs: int, seed: int, claim
           f"{time.perf_counter() - t0:.1f} s)")
     for line in format_table(results):
         print("  " + line)
+    n = len(next(iter(results[0].methods.values())).cee_curve_mean)
+    ks = (n // 10, n // 2, n)
+    print(f"  CEE(k) mean over each filter's kept runs at k = {ks} (the papers plot CEE(k)):")
+    for r in results:
+        if r.delta in (0.0, 0.07, 0.15):
+            cells = "  ".join(f"{m}: " + "/".join(f"{c.cee_curve_mean[k - 1]:.2e}" for k in ks)
+                              for m, c in r.methods.items())
+            print(f"    delta {r.delta:4.2f}  {cells}")
     if claims:
         for v in evaluate_claims(results):
             word = {True: "HOLDS", False: "FAILS"}

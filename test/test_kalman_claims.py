@@ -60,6 +60,23 @@ def test_batch_engine_equals_the_filter_class() -> None:
             assert np.allclose(out, est[run], rtol=0, atol=1e-7)
 
 
+def test_start_states() -> None:
+    """Eq. 32 (notes U7): x0 = [y2, 50 (y2 - y1)], P0 = [[1, 50], [50, 5000.1]]; the protected start stays
+    accurate with 4 gross outliers among its 15 samples."""
+    sc = replace(PAPER001_RADAR, startup="eq32")
+    y = np.array([[1000.0, 1001.0, 1002.0]])
+    k0, x0, P0 = start_state(y, sc)
+    assert k0 == 2 and x0.tolist() == [[1001.0, 50.0]] and P0.tolist() == pytest.approx([1.0, 50.0, 5000.1])
+    sc = replace(PAPER001_RADAR, startup="robust", n_start=15)
+    t = np.arange(15) * sc.T
+    y = (1000.0 + 50.0 * t + 0.1 * np.sin(7 * t))[None, :].copy()
+    y[0, [2, 5, 13, 14]] += [300.0, -250.0, 400.0, 280.0]
+    k0, x0, _ = start_state(y, sc)
+    assert k0 == 15
+    assert x0[0, 0] == pytest.approx(1000.0 + 50.0 * t[-1], abs=0.5)
+    assert x0[0, 1] == pytest.approx(50.0, abs=5)
+
+
 def test_c1_efficiency_without_outliers(main_results) -> None:
     """A2-A4 'not significantly worse' than A1 at delta = 0: within 25 % (observed 5-15 %), none lost."""
     r = main_results[0.0]

@@ -156,6 +156,12 @@ def test_bad_inputs_raise_kalman_error() -> None:
         RobustKalmanFilter(m, method="A5")
     with pytest.raises(KalmanError, match="non-finite"):
         update(np.zeros(2), np.eye(2), [np.nan], [[1.0]], H2)
+    with pytest.raises(KalmanError, match="initialize"):
+        KalmanFilter(m).initialize([1.0, 2.0])
+    with pytest.raises(KalmanError, match="non-finite"):
+        KalmanFilter(m).initialize([np.nan] * 7)
+    with pytest.raises(KalmanError, match="numbers"):
+        KalmanFilter(m).update(["a", None, 1, 2])
 
 
 def test_per_step_r_override_and_assignment() -> None:

@@ -140,3 +140,48 @@ def test_sim_does_not_import_rclpy() -> None:
     import sys
     code = "import sys, swir_tracker_ros.pelco.sim as s; assert 'rclpy' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def _settle(head, seconds: float, t0: float = 0.0) -> float:
+    t = t0
+    for _ in range(int(seconds / 0.005)):
+        t += 0.005
+        head.advance(0.005, t)
+    return t
+
+
+def test_head_model_positions_presets_stops_and_addresses() -> None:
+    from swir_tracker_ros.pelco.head import HeadConfig, HeadModel
+    from swir_tracker_ros.pelco.units import angle_to_raw
+
+    head = HeadModel(HeadConfig(address=3, tilt_min=-20.0, tilt_max=45.0, command_timeout=0.5))
+    # absolute pan position 30 deg left, in the vendor word (grows to the right)
+    head.apply(codec.decode(codec.set_pan_position(3, angle_to_raw(math.radians(30.0), -1, 0.0))), 0.0)
+    t = _settle(head, 2.0)
+    assert head.pan.angle == pytest.approx(30.0, abs=0.01) and head.pan.velocity == 0.0
+    head.apply(codec.decode(codec.set_preset(3, 7)), t)
+    head.apply(codec.decode(codec.set_pan_position(3, 0)), t)
+    t = _settle(head, 2.0, t)
+    assert head.pan.angle == pytest.approx(0.0, abs=0.01)
+    head.apply(codec.decode(codec.goto_preset(3, 7)), t)
+    t = _settle(head, 2.0, t)
+    assert head.pan.angle == pytest.approx(30.0, abs=0.01)
+    # frames for another address are ignored
+    head.apply(codec.decode(codec.up(1, 63)), t)
+    t = _settle(head, 0.2, t)
+    assert head.tilt.velocity == 0.0 and head.ignored == 1
+    # tilt end stop, then the head's command timeout stops it
+    head.apply(codec.decode(codec.up(3, 63)), t)
+    t2 = _settle(head, 0.3, t)
+    assert head.tilt.velocity > 0.0
+    head.apply(codec.decode(codec.up(3, 63)), t2)
+    t2 = _settle(head, 2.0, t2)
+    assert head.tilt.angle <= 45.0 and head.tilt.velocity == 0.0
+    reply = codec.decode(head.apply(codec.decode(codec.query(3, "tilt")), t2))
+    assert reply.cmd2 == codec.TILT_POSITION_REPLY and reply.word == 36000 - round(head.tilt.angle * 100)
+    # no valid frame for command_timeout (0.5 s): the head stops by itself
+    head.apply(codec.decode(codec.left(3, 40)), t2)
+    t3 = _settle(head, 0.4, t2)
+    assert head.pan.velocity > 0.0
+    _settle(head, 0.4, t3)
+    assert head.pan.velocity == 0.0

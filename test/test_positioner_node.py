@@ -13,6 +13,7 @@ from collections.abc import Iterator
 
 import pytest
 import rclpy
+from conftest import REPO
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
@@ -73,12 +74,12 @@ class Probe:
                 self.state_pub.publish(track_result_to_msg(result, Vector3Stamped().header))
             self.executor.spin_once(timeout_sec=0.04)
 
-    def until(self, predicate, timeout: float, error=None) -> bool:
+    def until(self, predicate, timeout: float, error=None, state=None) -> bool:
         end = time.monotonic() + timeout
         while time.monotonic() < end:
             if predicate():
                 return True
-            self.run(0.1, error)
+            self.run(0.1, error, state)
         return bool(predicate())
 
 
@@ -106,7 +107,8 @@ def expected_rate(error: float) -> float:
 
 
 def start_bridge(processes, port: str, *extra: str):
-    args = ["--ros-args", "-p", f"port:={port}", "-p", f"kp:={KP}", "-p", "deadband:=0.02",
+    args = ["--ros-args", "--params-file", str(REPO / "params" / "positioner.yaml"),
+            "-p", f"port:={port}", "-p", f"kp:={KP}", "-p", "deadband:=0.02",
             "-p", "reconnect_min:=0.1", "-p", "reconnect_max:=0.4"]
     for e in extra:
         args += ["-p", e]
@@ -117,32 +119,35 @@ def test_pty_direction_speed_deadband_and_sigterm_stop(processes, tmp_path, prob
     _sim, url, trace = start_sim(processes, tmp_path, "--link", str(tmp_path / "pelco"))
     bridge = start_bridge(processes, url)
     err = (0.1, 0.05)
-    assert probe.until(lambda: velocity_now(trace)[0] > 0.0, 20.0, err), processes.log(bridge)
-    probe.run(1.0, err)
-    pan_v, tilt_v = velocity_now(trace)
+    want = (expected_rate(err[0]), expected_rate(err[1]))
+
+    def at_speed() -> bool:
+        v = velocity_now(trace)
+        return abs(v[0] - want[0]) < 2e-6 and abs(v[1] - want[1]) < 2e-6
+
+    def stopped() -> bool:
+        return velocity_now(trace) == (0.0, 0.0)
+
     # positive errors: pan + (left, CCW from above) and tilt + (up), at the table speed of the P command
-    assert pan_v == pytest.approx(expected_rate(err[0]), abs=2e-6)
-    assert tilt_v == pytest.approx(expected_rate(err[1]), abs=2e-6)
-    assert probe.joints and probe.joints[-1].pan > 0.0 and probe.joints[-1].tilt > 0.0
+    assert probe.until(at_speed, 20.0, err), (velocity_now(trace), want, processes.log(bridge))
+    assert probe.until(lambda: probe.joints and probe.joints[-1].pan > 0.0 and probe.joints[-1].tilt > 0.0,
+                       3.0, err)
     # inside the deadband (0.02 rad) with messages still arriving: stop
-    probe.run(0.8, (0.01, -0.015), TrackState.TRACKING)
-    assert velocity_now(trace) == (0.0, 0.0)
     in_deadband = (0.01, -0.015)
+    assert probe.until(stopped, 3.0, in_deadband, TrackState.TRACKING)
     assert probe.until(lambda: probe.diag.get("reason") == "deadband or limit", 3.0, in_deadband), probe.diag
     # tracker lost: stop although the error is large
-    probe.run(0.5, (-0.2, 0.0), TrackState.TRACKING)
-    assert velocity_now(trace)[0] < 0.0
-    probe.run(0.6, (-0.2, 0.0), TrackState.LOST)
-    assert velocity_now(trace) == (0.0, 0.0)
+    assert probe.until(lambda: velocity_now(trace)[0] < 0.0, 3.0, (-0.2, 0.0), TrackState.TRACKING)
+    assert probe.until(stopped, 3.0, (-0.2, 0.0), TrackState.LOST)
+    probe.run(0.5, (-0.2, 0.0), TrackState.LOST)
+    assert stopped()
     # moving again, then SIGTERM: the bridge writes a stop before closing (this head has no timeout)
-    probe.run(0.8, (-0.2, 0.0), TrackState.TRACKING)
-    assert velocity_now(trace)[0] < 0.0
+    assert probe.until(lambda: velocity_now(trace)[0] < 0.0, 3.0, (-0.2, 0.0), TrackState.TRACKING)
     assert processes.stop(bridge, signal.SIGTERM) == 0
-    probe.run(0.5)
-    assert velocity_now(trace) == (0.0, 0.0)
     assert "stop written" in processes.log(bridge)
+    assert probe.until(stopped, 3.0)
     time.sleep(0.5)
-    assert velocity_now(trace) == (0.0, 0.0)
+    assert stopped()
 
 
 def test_watchdog_and_port_outage(processes, tmp_path, probe) -> None:
@@ -163,15 +168,15 @@ def test_watchdog_and_port_outage(processes, tmp_path, probe) -> None:
         tracker.wait(10)
     probe.run(1.5)
     rows = [r for r in read_trace(trace) if r["time"] > t_kill]
-    stopped_at = next(r["time"] for r in rows if r["pan_velocity"] == 0.0)
-    # watchdog 0.5 s + one control period + deceleration; well before anything else could stop it
-    assert stopped_at - t_kill < 0.5 + 0.4
+    stopped_at = next((r["time"] for r in rows if r["pan_velocity"] == 0.0), math.inf)
+    # watchdog 0.5 s + one control period + deceleration (+ scheduling slack on a loaded machine); the
+    # bridge's keep-alives would otherwise keep this head moving forever
+    assert stopped_at - t_kill < 0.5 + 1.0
     assert velocity_now(trace) == (0.0, 0.0)
     assert probe.until(lambda: probe.diag.get("reason", "").startswith("watchdog"), 3.0), probe.diag
 
     # port outage while the tracker keeps asking for motion
-    probe.run(0.8, (0.1, 0.0))
-    assert velocity_now(trace)[0] > 0.0
+    assert probe.until(lambda: velocity_now(trace)[0] > 0.0, 5.0, (0.1, 0.0))
     sim.send_signal(signal.SIGUSR1)
     t_off = time.time()
     probe.run(2.2, (0.1, 0.0))

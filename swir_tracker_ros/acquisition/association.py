@@ -17,7 +17,7 @@ from swir_tracker_ros.acquisition.descriptors import (
     rms_distance,
     siamese_distance,
 )
-from swir_tracker_ros.acquisition.motion import gate_distance2, motion_cost
+from swir_tracker_ros.acquisition.motion import gate_distances2, motion_cost
 from swir_tracker_ros.types import Box
 
 FORBIDDEN = 1e9  # cost of a pair outside the gate (never accepted)
@@ -69,10 +69,11 @@ def cost_matrix(tracks: Sequence[TrackLike], dets: Sequence[Detection], w: CostW
     n, m = len(tracks), len(dets)
     C = np.full((n, m), FORBIDDEN)
     gamma = np.full((n, m), np.nan)
+    centres = np.array([d.box.center for d in dets], dtype=np.float64).reshape(m, 2)
     for i, t in enumerate(tracks):
-        for j, d in enumerate(dets):
-            if gate_distance2(t.x, t.P, t.R, d.box.center) > w.gate_chi2:
-                continue
+        inside = gate_distances2(t.x, t.P, t.R, centres) <= w.gate_chi2
+        for j in np.flatnonzero(inside):
+            d = dets[j]
             a = d.appearance
             if a is None:
                 raise ValueError("detections must be described before association")

@@ -76,9 +76,9 @@ def dominant_orientation_cells(image: np.ndarray, cell: int = 10) -> np.ndarray:
     g = np.asarray(image, dtype=np.float32)
     ix = cv2.filter2D(g, -1, np.array([[-1.0, 0.0, 1.0]], np.float32), borderType=cv2.BORDER_REPLICATE)
     iy = cv2.filter2D(g, -1, np.array([[-1.0], [0.0], [1.0]], np.float32), borderType=cv2.BORDER_REPLICATE)
-    mag = np.hypot(ix, iy)
-    theta = np.mod(np.arctan2(ix, iy), np.pi)  # arctan(I_X / I_Y), unsigned
-    bins = np.minimum((theta / (np.pi / ORIENTATION_BINS)).astype(np.int64), ORIENTATION_BINS - 1)
+    mag, ang = cv2.cartToPolar(iy, ix)  # ang = atan2(I_X, I_Y) in [0, 2 pi): arctan(I_X / I_Y) of eq. (8)
+    theta = np.mod(ang, np.pi)  # unsigned orientation
+    bins = np.minimum((theta * (ORIENTATION_BINS / np.pi)).astype(np.int64), ORIENTATION_BINS - 1)
     ch, cw = g.shape[0] // cell, g.shape[1] // cell
     if ch == 0 or cw == 0:
         raise AcquisitionError(f"image {g.shape} is smaller than one {cell}x{cell} cell")
@@ -105,13 +105,20 @@ def rms_distance(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean(d * d)))
 
 
+LBP_SIZE = (48, 96)  # (w, h) the gray-level crop is resized to before its uniform LBP (project choice)
+
+
 def describe(gray: np.ndarray, box: Box, *, edge_size: tuple[int, int] = (100, 200), cell: int = 10) -> Appearance:
-    """Engineered features of one box in a uint8 gray frame (AcquisitionError when the box is off the image)."""
+    """Engineered features of one box in a uint8 gray frame (AcquisitionError when the box is off the image).
+
+    The gray-level LBP runs on the crop resized to LBP_SIZE so that its cost and its histogram do not
+    depend on the pedestrian's apparent size; the edge descriptor on edge_size (100 x 200: 10 x 20 cells).
+    """
     patch = crop(gray, box)
     if patch is None:
         raise AcquisitionError(f"box {box.as_tuple()} has no pixels inside the {gray.shape} image")
     return Appearance(
-        lbp=uniform_lbp_histogram(patch),
+        lbp=uniform_lbp_histogram(cv2.resize(patch, LBP_SIZE, interpolation=cv2.INTER_AREA)),
         mean=float(patch.mean()),
         std=float(patch.std()),
         edge=edge_lbp_histogram(patch, edge_size, cell),

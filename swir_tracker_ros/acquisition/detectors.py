@@ -138,12 +138,12 @@ class HogPeopleDetector:
         if len(rects) == 0:
             return []
         boxes = [[float(v) / p.upscale for v in r] for r in rects]
-        scores = [float(s) for s in np.ravel(weights)]
-        keep = cv2.dnn.NMSBoxes(boxes, scores, -1e9, p.nms_iou)
+        scores = [float(1.0 / (1.0 + np.exp(-s))) for s in np.ravel(weights)]  # SVM margin squashed to (0, 1)
+        keep = cv2.dnn.NMSBoxes(boxes, scores, 0.0, p.nms_iou)
         out = []
         for k in np.ravel(keep):
             x, y, w, h = boxes[int(k)]
-            out.append(Detection(Box(x, y, w, h), float(1.0 / (1.0 + np.exp(-scores[int(k)])))))
+            out.append(Detection(Box(x, y, w, h), scores[int(k)]))
         return out
 
 

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 N_BINS = 59  # 58 uniform 8-bit codes + 1 catch-all bin (paper 004 Section 3.2.2)
@@ -36,22 +37,24 @@ def lbp_codes(image: np.ndarray, *, paper_sign: bool = False) -> np.ndarray:
     With ``paper_sign`` the step function is the one printed in paper 004, s(x) = 1 for x <= 0 (a bit is set
     when the neighbour is not greater than the centre); otherwise the usual Ojala s(x) = 1 for x >= 0.
     """
-    g = np.asarray(image, dtype=np.float64)
+    g = np.asarray(image)
     if g.ndim != 2 or g.size == 0:
         raise ValueError(f"LBP needs a non-empty 2-D array, got shape {g.shape}")
-    pad = np.pad(g, 1, mode="edge")
+    if g.dtype not in (np.uint8, np.float32):
+        g = g.astype(np.float32)
+    pad = cv2.copyMakeBorder(g, 1, 1, 1, 1, cv2.BORDER_REPLICATE)
     h, w = g.shape
-    codes = np.zeros((h, w), dtype=np.int64)
+    codes = np.zeros((h, w), dtype=np.uint8)
     for p, (dy, dx) in enumerate(_OFFSETS):
         gp = pad[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
         bit = (gp <= g) if paper_sign else (gp >= g)
-        codes |= bit.astype(np.int64) << p
+        codes |= bit.view(np.uint8) << np.uint8(p)
     return codes
 
 
 def uniform_histogram(codes: np.ndarray) -> np.ndarray:
     """L1-normalised 59-bin uniform-pattern histogram of LBP codes (all zeros for an empty input)."""
-    hist = np.bincount(_LUT[np.asarray(codes, dtype=np.int64).ravel()], minlength=N_BINS).astype(np.float64)
+    hist = np.bincount(_LUT[np.asarray(codes).ravel()], minlength=N_BINS).astype(np.float64)
     total = hist.sum()
     return hist / total if total > 0 else hist
 

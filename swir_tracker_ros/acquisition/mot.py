@@ -59,6 +59,9 @@ class MotParams:
     tentative_max_miss: int = _f(5, "a tentative track missed this many frames is deleted", 1, 100)
     history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
     drift_threshold: int = _f(15, "a drifting track missed this many more frames is deleted", 1, 1000)
+    display_max_miss: int = _f(2, "a confirmed track is output while missed at most this many frames (the "
+                               "paper shows it until it drifts, 20; coasting boxes are mostly false positives)",
+                               0, 1000)
     history_len: int = _f(10, "positions kept for the motion pattern", 2, 100)
     siamese_min_w: int = _f(19, "Siamese nets only for boxes at least this wide (px)", 1, 10000)
     siamese_min_h: int = _f(50, "Siamese nets only for boxes at least this tall (px)", 1, 10000)
@@ -192,7 +195,7 @@ class MultiTargetTracker:
         self.tracks = [t for t in self.tracks if t.status is not None and not self._dead(t)]
         for t in self.tracks:
             t.history.append((float(t.x[0]), float(t.x[1])))
-        return [t for t in self.tracks if t.displayed]
+        return [t for t in self.tracks if t.displayed and t.misses <= p.display_max_miss]
 
     def _update(self, t: Track, d: Detection) -> None:
         p = self.params

@@ -58,6 +58,13 @@ def gate_distance2(x: np.ndarray, P: np.ndarray, R: np.ndarray, z_center: tuple[
     return float(nu @ np.linalg.solve(S, nu))
 
 
+def gate_distances2(x: np.ndarray, P: np.ndarray, R: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """gate_distance2 for an (m, 2) array of detection centres at once."""
+    S_inv = np.linalg.inv(P[:2, :2] + R[:2, :2])
+    nu = np.asarray(centres, dtype=np.float64).reshape(-1, 2) - x[:2]
+    return np.einsum("ij,jk,ik->i", nu, S_inv, nu)
+
+
 def motion_cost(
     pred: Box, det: Box, history: Sequence[tuple[float, float]], w_dst: float, w_dev: float
 ) -> float:

@@ -41,7 +41,7 @@ class FilterBank:
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         self.kind = p.feature
         self.cell = p.cell_size if p.feature == "hog" else 1
-        self.exclusion = p.psr_exclusion
+        self.exclusion = max(1, math.ceil(p.psr_exclusion_px / self.cell))
         self.model_scale = 0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
         gray = p.feature == "gray"
         if p.pipeline == "kcf":

@@ -64,7 +64,6 @@ def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     obin = np.rint(ang * (nb / (2.0 * np.pi))).astype(np.intp)
     obin[obin >= nb] -= nb
     x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
-    _, _, _, _, Ay = _axis_plan(h, cell)
     hc, wc = h // cell, w // cell
     rows = (np.arange(n * h, dtype=np.intp) * (wc * nb)).reshape(n, h, 1)
     i0 = rows + x0[None, None, :] * nb + obin
@@ -72,8 +71,27 @@ def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     index = np.concatenate([i0.ravel(), i1.ravel()])
     weight = np.concatenate([(mag * wx0).ravel(), (mag * wx1).ravel()])
     hx = np.bincount(index, weights=weight, minlength=n * h * wc * nb).astype(np.float32)
-    hist = np.matmul(Ay, hx.reshape(n, h, wc * nb))  # (n, hc, wc*nb)
-    return hist.reshape(n, hc, wc, nb)
+    return _pool_rows(hx.reshape(n, h, wc * nb), cell).reshape(n, hc, wc, nb)
+
+
+def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
+    """Bilinear pooling of pixel rows (n, h, k) into cell rows (n, h // cell, k).
+
+    Row r + cell * i sits at cell coordinate i + (r + 0.5) / cell - 0.5: it gives weight 1 - |d| to cell i
+    and |d| to the neighbour on the side of d (dropped at the grid border). One pass per row offset r.
+    """
+    n, h, k = hx.shape
+    hc = h // cell
+    out = np.zeros((n, hc, k), dtype=np.float32)
+    for r in range(cell):  # `cell` (4) vectorised passes, not a loop over pixels
+        rows = hx[:, r : r + cell * hc : cell]
+        d = (r + 0.5) / cell - 0.5
+        out += np.float32(1.0 - abs(d)) * rows
+        if d < 0:  # also feeds the cell above
+            out[:, :-1] += np.float32(-d) * rows[:, 1:]
+        elif d > 0:  # also feeds the cell below
+            out[:, 1:] += np.float32(d) * rows[:, :-1]
+    return out
 
 
 def fhog(patches: np.ndarray, cell: int = 4) -> np.ndarray:
@@ -90,16 +108,20 @@ def fhog(patches: np.ndarray, cell: int = 4) -> np.ndarray:
     n, hc, wc, _ = hist.shape
     insens = hist[..., :N_ORIENT] + hist[..., N_ORIENT:]
     energy = np.einsum("nijk,nijk->nij", insens, insens)
-    e = np.pad(energy, ((0, 0), (1, 1), (1, 1)), mode="edge")
+    e = np.empty((n, hc + 2, wc + 2), dtype=np.float32)  # edge-replicated border of one cell
+    e[:, 1:-1, 1:-1] = energy
+    e[:, 0, 1:-1], e[:, -1, 1:-1] = energy[:, 0], energy[:, -1]
+    e[:, :, 0], e[:, :, -1] = e[:, :, 1], e[:, :, -2]
     # sum of each 2x2 block of (padded) cells; block (i, j) covers padded cells i..i+1, j..j+1
     blocks = e[:, :-1, :-1] + e[:, 1:, :-1] + e[:, :-1, 1:] + e[:, 1:, 1:]  # (n, hc+1, wc+1)
-    eps = 1e-4 / (4.0 * cell**4 * 2.0)
-    inv = 1.0 / np.sqrt(blocks + eps)
-    norms = np.stack([inv[:, :-1, :-1], inv[:, :-1, 1:], inv[:, 1:, :-1], inv[:, 1:, 1:]], axis=-1)  # (n,hc,wc,4)
-    sens = np.minimum(hist[..., None, :] * norms[..., :, None], CLIP)  # (n, hc, wc, 4, 18)
-    ins = np.minimum(insens[..., None, :] * norms[..., :, None], CLIP)  # (n, hc, wc, 4, 9)
+    inv = 1.0 / np.sqrt(blocks + np.float32(1e-4 / (4.0 * cell**4 * 2.0)))
+    norms = np.empty((4, n, hc, wc, 1), dtype=np.float32)  # the 4 blocks around each cell
+    norms[0, ..., 0], norms[1, ..., 0] = inv[:, :-1, :-1], inv[:, :-1, 1:]
+    norms[2, ..., 0], norms[3, ..., 0] = inv[:, 1:, :-1], inv[:, 1:, 1:]
+    both = norms * np.concatenate([hist, insens], axis=-1)[None]  # (4, n, hc, wc, 27)
+    np.minimum(both, np.float32(CLIP), out=both)
     out = np.empty((n, hc, wc, N_CHANNELS), dtype=np.float32)
-    out[..., : 2 * N_ORIENT] = 0.5 * sens.sum(axis=3)
-    out[..., 2 * N_ORIENT : 3 * N_ORIENT] = 0.5 * ins.sum(axis=3)
-    out[..., 3 * N_ORIENT :] = TEXTURE_WEIGHT * sens.sum(axis=4)
+    out[..., : 3 * N_ORIENT] = (both[0] + both[1] + both[2] + both[3]) * np.float32(0.5)
+    out[..., 3 * N_ORIENT :] = np.moveaxis(both[..., : 2 * N_ORIENT].sum(axis=-1), 0, -1)
+    out[..., 3 * N_ORIENT :] *= np.float32(TEXTURE_WEIGHT)
     return np.ascontiguousarray(out.transpose(0, 3, 1, 2))

@@ -51,8 +51,8 @@ class TrackerParams:
     large_target_halving: float = _f(100.0, "model works at half resolution when sqrt(w h) >= this many pixels "
                                      "(KCF reference); 0 disables", 0.0, 10000.0)
     psr_threshold: float = _f(7.0, "KCF failure detection: PSR below this switches to 9 windows (paper 000)", 0.0, 100.0)
-    psr_exclusion: int = _f(10, "side of the region around the peak excluded from the sidelobe, response cells",
-                            1, 50)
+    psr_exclusion_px: int = _f(10, "side of the square around the peak excluded from the PSR sidelobe, in "
+                               "template pixels (paper 000: 10x10); ceil(px / cell) response cells", 1, 100)
     update_peak_threshold: float = _f(0.5, "KCF: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0)
     apce_occlusion_ratio: float = _f(0.6, "DCF-CA: occlusion when APCE <= ratio x mean APCE (eq. 4.96)", 0.0, 2.0)
     apce_update_ratio: float = _f(0.583, "DCF-CA: no model update when APCE <= ratio x mean (eq. 4.97)", 0.0, 2.0)

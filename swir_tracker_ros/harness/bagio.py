@@ -17,6 +17,7 @@ from msg_adapters.errors import MessageError
 
 from ..errors import HarnessError
 from ..types import Box
+from .salvage import scan
 
 try:  # Python 3.14 ships compression.zstd; rosbags depends on the backport before that
     from compression import zstd  # type: ignore[import-not-found]
@@ -146,13 +147,15 @@ class BagReader:
             self.version = _metadata_version(self.path)
             self.compression = reader.compression_format if reader.compression_mode else None
             self.compression_mode = reader.compression_mode
+            mcaps = [f for f in self._storage_files(reader) if f.suffix == ".mcap" and f.exists()]
+            if self.compression is None and mcaps and (chunk := mcap_chunk_compression(mcaps[0])):
+                self.compression = f"{chunk} (mcap chunks)"
             meta = getattr(reader.storage, "metadata", None)
             self.custom = dict((meta.custom if meta is not None else None) or {})
             self.start_ns, self.end_ns = reader.start_time, reader.end_time
             self.connections = [(c.topic, c.msgtype, c.msgcount) for c in reader.connections]
             if self.path.is_dir():
-                rel = _metadata(self.path).get("relative_file_paths", [])
-                self.files = [self.path / Path(f).name for f in rel]
+                self.files = self._storage_files(reader)
                 unmatched = _unmatched(reader)
                 if unmatched:
                     self.read_mode = "storage files"
@@ -161,13 +164,29 @@ class BagReader:
         finally:
             reader.close()
 
+    def _storage_files(self, reader: Reader) -> list[Path]:
+        if not self.path.is_dir():
+            return [self.path]
+        return [self.path / Path(f).name for f in _metadata(self.path).get("relative_file_paths", [])]
+
     def _open(self, path: Path) -> Reader:
         try:
             reader = Reader(path)
             reader.open()
         except Exception as exc:  # rosbags, sqlite3, mcap and zstd raise many types for one cause
-            raise HarnessError(f"{path}: cannot open the bag: {type(exc).__name__}: {exc}") from None
+            raise HarnessError(self._damage(path, f"cannot open the bag: {type(exc).__name__}: {exc}")) \
+                from None
         return reader
+
+    def _damage(self, path: Path, what: str) -> str:
+        """`what` went wrong in `path`: add which storage file is damaged and its last good message."""
+        files = [path] if path.is_file() else sorted(
+            f for f in path.iterdir() if f.suffix in (".db3", ".mcap")) if path.is_dir() else []
+        for f in files:
+            d = scan(f)
+            if d is not None:
+                return f"{d.sentence()} ({what})"
+        return f"{path}: {what}"
 
     @staticmethod
     def _storage_id(reader: Reader) -> str:
@@ -203,8 +222,9 @@ class BagReader:
                     except StopIteration:
                         break
                     except Exception as exc:
-                        raise HarnessError(f"{src}: unreadable after {count} good messages; last good "
-                                           f"message: {last}: {type(exc).__name__}: {exc}") from None
+                        why = f"{type(exc).__name__}: {exc}"
+                        raise HarnessError(self._damage(src, f"reading stopped after {count} good messages "
+                                                        f"(last good message: {last}): {why}")) from None
                     if self.read_mode == "storage files" and self.compression_mode == "message":
                         raw = zstd.decompress(raw)
                     yield conn.topic, conn.msgtype, t, raw
@@ -219,6 +239,27 @@ class BagReader:
         except Exception as exc:
             why = f"{type(exc).__name__}: {exc}"
             raise HarnessError(f"{self.path}: {where}: cannot decode {msgtype}: {why}") from None
+
+
+def mcap_chunk_compression(path: Path) -> str | None:
+    """Compression of the first chunk of an MCAP file ('zstd', 'lz4'; None: no chunk or uncompressed)."""
+    import struct
+
+    with path.open("rb") as fh:
+        if fh.read(8) != b"\x89MCAP0\r\n":
+            return None
+        while True:
+            head = fh.read(9)
+            if len(head) < 9:
+                return None
+            op, length = head[0], struct.unpack("<Q", head[1:])[0]
+            if op == 0x06:  # Chunk: start u64, end u64, size u64, crc u32, compression string
+                body = fh.read(min(length, 32 + 4 + 64))
+                n = struct.unpack_from("<I", body, 28)[0]
+                return body[32:32 + n].decode(errors="replace") or None
+            if op in (0x02, 0x0F):  # footer or data end: no chunk in the data section
+                return None
+            fh.seek(length, 1)
 
 
 def _metadata(path: Path) -> dict[str, Any]:
@@ -310,9 +351,9 @@ def read_frames(path: Path | str, image_topic: str | None = None, gt_topic: str 
                 occ[t] = bool(msg.data)
         except MessageError as exc:
             raise HarnessError(f"{br.path}: {topic} at {t} ns: {exc}") from None
-    k = 0
+    k, last = 0, "none"
     for _topic, msgtype, t, raw in br.messages({img_t}):
-        msg = br.deserialize(raw, msgtype, f"image #{k + 1} at {t} ns")
+        msg = br.deserialize(raw, msgtype, f"image #{k + 1} at {t} ns (last good image: {last})")
         stamp = mb.stamp_to_ns(msg.header.stamp)
         try:
             image = mb.image_to_array(msg)
@@ -320,6 +361,7 @@ def read_frames(path: Path | str, image_topic: str | None = None, gt_topic: str 
             raise HarnessError(f"{br.path}: image #{k + 1} at {t} ns: {exc}") from None
         yield FrameRecord(stamp, image, gts.get(stamp), occ.get(t), k)
         k += 1
+        last = f"#{k} at {t} ns"
     declared = br.declared().get(img_t)
     if declared is not None and k < declared:
         raise HarnessError(f"{br.path}: {declared} images declared but only {k} read; the bag is truncated")

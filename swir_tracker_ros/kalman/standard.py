@@ -112,8 +112,12 @@ class KalmanFilter:
 
     def initialize(self, x: Any, P: Any = None) -> None:
         """Set the state (and covariance, default: keep the current P); raises KalmanError if non-finite."""
-        x = np.asarray(x, dtype=float).reshape(self.dim_x).copy()
-        P = self.P if P is None else np.asarray(P, dtype=float).copy()
+        try:
+            x = np.asarray(x, dtype=float).reshape(self.dim_x).copy()
+            P = self.P if P is None else np.asarray(P, dtype=float).reshape(self.dim_x, self.dim_x).copy()
+        except (TypeError, ValueError) as exc:
+            n = self.dim_x
+            raise KalmanError(f"initialize needs x of {n} numbers and P of {n}x{n}: {exc}") from None
         check_matrices(x, P, self.H, self.R)
         self.x, self.P = x, P
 
@@ -150,7 +154,10 @@ class KalmanFilter:
             if influence is not None and self.method != "A1":
                 thr = float(threshold) if threshold is not None else influence.threshold
             return coast_info(self.dim_z, thr)
-        z = np.asarray(z, dtype=float).reshape(-1)
+        try:
+            z = np.asarray(z, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise KalmanError(f"measurement z must be {self.dim_z} numbers, got {z!r}") from None
         self.x, self.P, info = sequential_update(
             self.x, self.P, z, R_use, self.H, influence, self.robust_components, self.method,
             self._alpha_f(), threshold if influence is not None else None)

@@ -131,6 +131,7 @@ class FrameStats:
             "latency_ms_p50": pct(self.latency_ms, 50), "latency_ms_p99": pct(self.latency_ms, 99),
             "latency_ms_max": max(self.latency_ms, default=math.nan),
             "core_ms_mean": float(np.mean(self.core_ms)) if self.core_ms else math.nan,
+            "core_ms_p50": pct(self.core_ms, 50), "core_ms_p99": pct(self.core_ms, 99),
             "core_ms_max": max(self.core_ms, default=math.nan),
             "stamp_age_ms_p50": pct(self.age_ms, 50),
             **{f"window_{k}": v for k, v in counts.items()},

@@ -113,7 +113,7 @@ class PanTiltController:
         common = dict(kp=p.kp, ki=p.ki, integral_limit=p.integral_limit, deadband=p.deadband,
                       min_byte=p.min_speed_byte, max_byte=p.max_speed_byte, max_accel=p.max_accel,
                       lookahead=p.limit_lookahead)
-        pan_limited = p.pan_min > -math.pi or p.pan_max < math.pi
+        pan_limited = p.pan_min > -math.pi + 1e-6 or p.pan_max < math.pi - 1e-6  # +-pi: continuous pan
         self.pan = AxisController(
             SpeedTable(xs, tuple(p.pan_speed_table), p.pan_turbo_speed), invert=p.invert_pan,
             lo=p.pan_min if pan_limited else -math.inf, hi=p.pan_max if pan_limited else math.inf,

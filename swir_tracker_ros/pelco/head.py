@@ -108,8 +108,9 @@ class HeadModel:
     def advance(self, dt: float, now: float) -> None:
         cfg = self.cfg
         if cfg.command_timeout > 0 and now - self.last_frame_time > cfg.command_timeout:
-            self.pan.target_velocity = self.tilt.target_velocity = 0.0
-            self.pan.goal = self.tilt.goal = None
+            for joint in (self.pan, self.tilt):  # continuous moves only; position moves run to their goal
+                if joint.goal is None:
+                    joint.target_velocity = 0.0
         self.pan.advance(dt, cfg.max_accel, cfg.pan_table.turbo_dps)
         self.pan.angle = wrap_deg(self.pan.angle)
         self.tilt.advance(dt, cfg.max_accel, cfg.tilt_table.max_dps)

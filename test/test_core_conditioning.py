@@ -1,0 +1,80 @@
+# SPDX-License-Identifier: Apache-2.0
+"""SWIR frame conditioning (bit depths, stretch, dead pixels, fields, downscale) and TrackerParams."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from swir_tracker_ros.core.conditioning import (
+    ConditioningConfig,
+    ConditioningError,
+    FrameConditioner,
+    single_field,
+    to_gray,
+)
+from swir_tracker_ros.core.params import TrackerParams
+from swir_tracker_ros.errors import ParameterError, TrackerError
+
+
+def test_16bit_stretch_uses_the_robust_range_without_overflow() -> None:
+    rng = np.random.default_rng(0)
+    frame = rng.integers(30000, 30400, (64, 80)).astype(np.uint16)  # low-contrast SWIR-like
+    frame[0, 0], frame[1, 1] = 65535, 0  # single hot / cold pixels must not set the range
+    out = FrameConditioner(ConditioningConfig(stretch_smoothing=0.0))(frame)
+    assert out.dtype == np.float32 and out.min() >= 0.0 and out.max() <= 1.0
+    assert np.percentile(out, 95) - np.percentile(out, 5) > 0.8  # contrast spread over the range
+
+
+def test_8bit_passthrough_and_bit_depth_hint() -> None:
+    frame = np.arange(256, dtype=np.uint8).reshape(16, 16)
+    out = FrameConditioner(ConditioningConfig())(frame)
+    assert out[0, 0] == 0.0 and out[-1, -1] == pytest.approx(1.0)
+    twelve = (np.arange(256, dtype=np.uint16) * 16).reshape(16, 16)
+    off = FrameConditioner(ConditioningConfig(stretch="off"))
+    assert off(twelve, bit_depth=12).max() == pytest.approx(4080 / 4095)
+    assert off(twelve).max() == pytest.approx(4080 / 65535)
+
+
+def test_colour_and_bad_frames() -> None:
+    bgr = np.zeros((20, 30, 3), np.uint8)
+    bgr[..., 2] = 255
+    assert to_gray(bgr).shape == (20, 30)
+    cond = FrameConditioner(ConditioningConfig())
+    for bad in (np.zeros((20, 30, 2)), np.zeros((4, 4)), np.zeros((20, 30), bool), np.full((20, 30), np.nan)):
+        with pytest.raises(ConditioningError):
+            cond(bad)
+    assert issubclass(ConditioningError, TrackerError)
+
+
+def test_dead_pixels_fields_and_downscale() -> None:
+    img = np.full((40, 60), 0.4, np.float32)
+    img[10, 10] = 1.0  # salt
+    img[20, 30] = 0.0  # pepper
+    out = FrameConditioner(ConditioningConfig(stretch="off", dead_pixel_threshold=0.2))(img)
+    assert np.allclose(out, 0.4)
+    inter = np.zeros((8, 6), np.float32)
+    inter[1::2] = 1.0  # odd field bright (combing)
+    assert np.allclose(single_field(inter, "even"), 0.0) and np.allclose(single_field(inter, "odd"), 1.0)
+    small = FrameConditioner(ConditioningConfig(stretch="off", downscale=0.5))(np.zeros((100, 80), np.uint8))
+    assert small.shape == (50, 40)
+
+
+def test_tracker_params_are_flat_documented_and_validated() -> None:
+    p = TrackerParams()
+    p.validate()
+    for f in dataclasses.fields(p):
+        assert f.type in ("str", "int", "float", "bool", "list[float]"), f.name
+        assert f.metadata.get("doc"), f.name
+        if f.type == "str":
+            assert getattr(p, f.name) in f.metadata["choices"]
+    assert p.scale_factors() == pytest.approx((0.90, 0.95, 1.0, 1.05, 1.10))
+    assert (p.kcf_padding, p.kcf_lambda, p.kcf_kernel_sigma, p.kcf_interp_factor) == (1.5, 1e-4, 0.5, 0.02)
+    assert (p.dcf_lambda1, p.dcf_lambda2, p.dcf_padding, p.dcf_interp_factor) == (1e-4, 25.0, 2.0, 0.015)
+    assert (p.psr_threshold, p.update_peak_threshold, p.apce_occlusion_ratio) == (7.0, 0.5, 0.6)
+    for bad in (dict(variant="magic"), dict(psr_threshold=-1.0), dict(n_scales=4), dict(kcf_padding="2"),
+                dict(grid_scale_search=1)):
+        with pytest.raises(ParameterError):
+            TrackerParams(**bad).validate()
