@@ -1,9 +1,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """MOT metrics and the paper 004 Table 6 style ablation of the acquisition tracker (prints markdown tables).
 
-    .venv/bin/python benchmarks/mot_eval.py               # TUD-Campus (det.txt, HOG, motion) + synthetic scenes
-    .venv/bin/python benchmarks/mot_eval.py --quick       # fewer synthetic scenes
-Rows: base association (eq. 1 + eq. 2), + engineered edge descriptor (w3 tau), + Siamese score (gamma), + both.
+    .venv/bin/python benchmarks/mot_eval.py            # TUD-Campus (det.txt, HOG, motion) + synthetic
+    .venv/bin/python benchmarks/mot_eval.py --quick    # fewer synthetic scenes
+Rows: base association (eq. 1 + eq. 2), + engineered edge descriptor (w3 tau), + Siamese score (gamma),
++ both.
 Columns: MOTA, MOTP (mean IoU of matches), IDF1, ID switches, and Table 6's "precision" (matched / GT, the
 conventional recall) and "recall" (matched / output, the conventional precision); per-frame association time.
 """
@@ -129,8 +130,9 @@ def evaluate(frames: Iterable[Frame], detector: Detector, tracker: MultiTargetTr
     s = mh.compute(acc, metrics=["mota", "motp", "idf1", "num_switches", "recall", "precision"], name="x")
     row = s.loc["x"]
     motp = 1.0 - float(row["motp"]) if np.isfinite(row["motp"]) else 0.0
-    return Result(float(row["mota"]), motp, float(row["idf1"]), int(row["num_switches"]), float(row["recall"]),
-                  float(row["precision"]), 1000.0 * float(np.mean(times)) if times else 0.0, n)
+    return Result(float(row["mota"]), motp, float(row["idf1"]), int(row["num_switches"]),
+                  float(row["recall"]), float(row["precision"]),
+                  1000.0 * float(np.mean(times)) if times else 0.0, n)
 
 
 def ablation(make_frames: Callable[[], Iterable[Frame]], make_detector: Callable[[], Detector],
@@ -165,8 +167,9 @@ def table(title: str, res: dict[str, Result]) -> str:
         if name == "object detector":
             lines.append(f"| {name} | - | - | - | - | {100 * r.recall:.2f}% | {100 * r.precision:.2f}% | - |")
         else:
-            lines.append(f"| {name} | {100 * r.mota:.2f}% | {100 * r.motp:.2f}% | {100 * r.idf1:.2f}% | {r.idsw} "
-                         f"| {100 * r.recall:.2f}% | {100 * r.precision:.2f}% | {r.assoc_ms:.1f} |")
+            lines.append(f"| {name} | {100 * r.mota:.2f}% | {100 * r.motp:.2f}% | {100 * r.idf1:.2f}% "
+                         f"| {r.idsw} | {100 * r.recall:.2f}% | {100 * r.precision:.2f}% "
+                         f"| {r.assoc_ms:.1f} |")
     return "\n".join(lines) + "\n"
 
 

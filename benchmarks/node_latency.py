@@ -46,6 +46,28 @@ from swir_tracker_ros.nodes.tracker_node import DIAG_NAME
 REPO = Path(__file__).resolve().parent.parent
 TARGET = 32
 
+# Fast DDS's built-in shared-memory segment (512 KiB) is smaller than one 640x512 mono16 frame (640 KiB),
+# so such frames travel as UDP fragments, and best-effort samples are lost whenever a fragment overflows
+# the socket buffer. A shared-memory transport with a larger segment carries them whole.
+SHM_PROFILE = """<?xml version="1.0" encoding="UTF-8"?>
+<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <transport_descriptors>
+    <transport_descriptor>
+      <transport_id>shm_large</transport_id>
+      <type>SHM</type>
+      <segment_size>16777216</segment_size>
+      <maxMessageSize>4194304</maxMessageSize>
+    </transport_descriptor>
+  </transport_descriptors>
+  <participant profile_name="shm_large_participant" is_default_profile="true">
+    <rtps>
+      <userTransports><transport_id>shm_large</transport_id></userTransports>
+      <useBuiltinTransports>false</useBuiltinTransports>
+    </rtps>
+  </participant>
+</profiles>
+"""
+
 
 class SyntheticSequence:
     """A textured target on a Lissajous path over a noisy, vignetted 16-bit background (8 noise frames)."""
@@ -112,11 +134,18 @@ def main() -> int:
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--height", type=int, default=512)
     ap.add_argument("--executable", default=str(Path(sys.prefix) / "bin" / "tracker"))
+    ap.add_argument("--transport", choices=("shm", "default"), default="shm",
+                    help="shm: Fast DDS shared memory with a 16 MiB segment (profile written to a temp dir); "
+                         "default: Fast DDS built-in transports")
     args = ap.parse_args()
+    tmp = Path(tempfile.mkdtemp(prefix="node_latency_"))
+    if args.transport == "shm":
+        (tmp / "fastdds_shm.xml").write_text(SHM_PROFILE)
+        os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(tmp / "fastdds_shm.xml")  # here and in the node
 
     seq = SyntheticSequence(args.width, args.height)
     cx, cy = seq.centre(0)
-    log = Path(tempfile.mkdtemp(prefix="node_latency_")) / "tracker.log"
+    log = tmp / "tracker.log"
     cmd = [args.executable, "--ros-args", "--params-file", str(REPO / "params" / "tracker.yaml"),
            "-p", "fov_h_deg:=20.0"]
     fh = log.open("wb")
@@ -183,8 +212,8 @@ def main() -> int:
     last = node.diags[-1] if node.diags else {}
     p50, p99 = (np.percentile(lat, 50), np.percentile(lat, 99)) if lat.size else (math.nan, math.nan)
     print(f"node latency: {args.width}x{args.height} mono16 at {args.rate:g} Hz, {len(measured)} frames "
-          f"measured (+{args.warmup} warm-up), sent in {wall:.1f} s; load average {os.getloadavg()[0]:.2f}, "
-          f"nice {os.nice(0)}")
+          f"measured (+{args.warmup} warm-up), sent in {wall:.1f} s; transport {args.transport}; "
+          f"load average {os.getloadavg()[0]:.2f}, nice {os.nice(0)}")
     print(f"  image -> /track/pan_tilt_error  p50 {p50:6.2f} ms  p99 {p99:6.2f} ms  max {lat.max():6.2f} ms")
     print(f"  dropped frames (no /track/box): {drops} of {len(measured)}; frames without pan_tilt_error: "
           f"{no_error}; node totals: "

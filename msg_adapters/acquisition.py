@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Acquisition tracks <-> visualization_msgs/MarkerArray on /acquisition/tracks and /acquisition/candidates."""
+"""Acquisition tracks <-> visualization_msgs/MarkerArray (/acquisition/tracks, /acquisition/candidates)."""
 
 from __future__ import annotations
 
@@ -99,13 +99,13 @@ def render_tracks_debug(frame: np.ndarray, tracks: Sequence[TrackBox], header: H
     for t in tracks:
         c = _color(t.id)
         bgr = (int(255 * c.b), int(255 * c.g), int(255 * c.r))
-        p0 = (int(round(t.box.x)), int(round(t.box.y)))
-        p1 = (int(round(t.box.x + t.box.w)), int(round(t.box.y + t.box.h)))
+        p0 = (round(t.box.x), round(t.box.y))
+        p1 = (round(t.box.x + t.box.w), round(t.box.y + t.box.h))
         cv2.rectangle(img, p0, p1, bgr, 3 if t.id == selected else 1)
         cv2.putText(img, str(t.id), (p0[0], max(10, p0[1] - 3)), cv2.FONT_HERSHEY_SIMPLEX, 0.45, bgr, 1)
     for rank, t in enumerate(candidates, 1):
-        p0 = (int(round(t.box.x)), int(round(t.box.y)))
-        p1 = (int(round(t.box.x + t.box.w)), int(round(t.box.y + t.box.h)))
+        p0 = (round(t.box.x), round(t.box.y))
+        p1 = (round(t.box.x + t.box.w), round(t.box.y + t.box.h))
         cv2.rectangle(img, p0, p1, (0, 0, 255), 2)
         cv2.putText(img, f"#{rank}", (p0[0], p1[1] + 12), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 255), 1)
     return numpy_to_image(img, header, "bgr8")

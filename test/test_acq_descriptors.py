@@ -37,7 +37,7 @@ def test_uniform_lut_has_58_uniform_codes_and_59_bins() -> None:
 
 
 def test_lbp_code_of_a_known_neighbourhood() -> None:
-    # centre 5; neighbours clockwise from top-left: 9, 1, 9, 1, 9, 1, 9, 1 -> bits 0, 2, 4, 6 set (Ojala s >= 0)
+    # centre 5; neighbours clockwise from top-left: 9, 1, 9, 1, 9, 1, 9, 1 -> bits 0, 2, 4, 6 (s >= 0)
     img = np.array([[9, 1, 9], [1, 5, 1], [9, 1, 9]], np.uint8)
     img[1, 2], img[2, 1] = 9, 9  # right (bit 3) and bottom (bit 5) neighbours too
     code = int(lbp_codes(img)[1, 1])

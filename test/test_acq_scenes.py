@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Identity keeping on synthetic thermal scenes (paper 004 Fig. 6 claim): crossing and a 10-frame occlusion."""
+"""Identity keeping on synthetic thermal scenes (paper 004 Fig. 6): a crossing and a 10-frame occlusion."""
 
 from __future__ import annotations
 
+import motmetrics as mm
 import numpy as np
 import pytest
 
@@ -12,19 +13,29 @@ from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
 
 
 def _identity_map(scene: crowd.CrowdScene, frames: int, tracker: MultiTargetTracker, detector=None,
-                  seed: int = 0) -> dict[int, list[int]]:
-    """For every ground-truth id, the sequence of track ids that covered it (IoU > 0.5), frame by frame."""
+                  seed: int = 0) -> tuple[dict[int, list[int]], int]:
+    """Run a scene; MOT matching (motmetrics: keep a GT-track pair while IoU >= 0.5, else Hungarian).
+
+    Returns, for every ground-truth id, the track ids matched to it frame by frame, and the number of ID
+    switches motmetrics counts.
+    """
     rng = np.random.default_rng(seed)
     bg = crowd.background(scene)
-    seen: dict[int, list[int]] = {}
+    acc = mm.MOTAccumulator(auto_id=True)
     for k in range(frames):
         img, gts = crowd.render(scene, k, bg)
         dets = detector.detect(img) if detector is not None else crowd.simulated_detections(gts, rng)
-        for t in tracker.step(img, dets):
-            best = max(gts, key=lambda g: g.box.iou(t.box))
-            if best.box.iou(t.box) > 0.5:
-                seen.setdefault(best.id, []).append(t.id)
-    return seen
+        tracks = tracker.step(img, dets)
+        gts = [g for g in gts if g.visibility >= 0.25]
+        dist = np.array([[1.0 - g.box.iou(t.box) for t in tracks] for g in gts]).reshape(len(gts), len(tracks))
+        dist[dist > 0.5] = np.nan
+        acc.update([g.id for g in gts], [t.id for t in tracks], dist)
+    ev = acc.mot_events
+    seen: dict[int, list[int]] = {}
+    for _, row in ev[ev["Type"].isin(["MATCH", "SWITCH"])].iterrows():
+        seen.setdefault(int(row["OId"]), []).append(int(row["HId"]))
+    switches = int((ev["Type"] == "SWITCH").sum())
+    return seen, switches
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -32,10 +43,10 @@ def test_two_pedestrians_crossing_keep_their_ids(seed: int) -> None:
     scene = crowd.crossing_scene(seed)
     _, gts = crowd.render(scene, 40)
     assert min(g.visibility for g in gts) < 0.2  # they really overlap mid-way
-    seen = _identity_map(scene, 80, MultiTargetTracker(MotParams()), seed=seed)
+    seen, switches = _identity_map(scene, 80, MultiTargetTracker(MotParams()), seed=seed)
     assert sorted(seen) == [1, 2]
     ids = {g: set(v) for g, v in seen.items()}
-    assert all(len(v) == 1 for v in ids.values()), ids  # no identity switch
+    assert switches == 0 and all(len(v) == 1 for v in ids.values()), ids
     assert ids[1] != ids[2]
     assert all(len(v) > 50 for v in seen.values())  # tracked before and after the crossing
 
@@ -45,12 +56,12 @@ def test_pedestrian_occluded_for_ten_frames_keeps_its_id() -> None:
     bg = crowd.background(scene)
     hidden = [k for k in range(80) if crowd.render(scene, k, bg)[1][0].visibility == 0.0]
     assert len(hidden) >= 10
-    seen = _identity_map(scene, 80, MultiTargetTracker(MotParams()))
-    assert set(seen[1]) == {seen[1][0]}
+    seen, switches = _identity_map(scene, 80, MultiTargetTracker(MotParams()))
+    assert switches == 0 and set(seen[1]) == {seen[1][0]}
     assert len(seen[1]) > 40
 
 
 def test_occlusion_with_our_motion_detector_keeps_the_id() -> None:
     scene = crowd.occlusion_scene(1, occluded_frames=10)
-    seen = _identity_map(scene, 80, MultiTargetTracker(MotParams()), MotionDetector())
-    assert len(seen[1]) > 30 and len(set(seen[1])) == 1
+    seen, switches = _identity_map(scene, 80, MultiTargetTracker(MotParams()), MotionDetector())
+    assert switches == 0 and len(seen[1]) > 30 and len(set(seen[1])) == 1

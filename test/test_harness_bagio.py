@@ -53,6 +53,14 @@ def test_round_trip_bit_exact(tmp_path, storage, dtype, compress):
     assert info.duration_s == pytest.approx(0.2)
 
 
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_metadata_version_8(tmp_path, storage):
+    bag = tmp_path / "v8"
+    write_bag(bag, frames(np.uint8, n=3), storage=storage, version=8)
+    assert bag_info(bag).version == 8
+    np.testing.assert_array_equal(list(read_frames(bag))[2].image, frames(np.uint8, n=3)[2].image)
+
+
 def test_image_adapter_honours_step_padding_and_endianness():
     ts = mb.typestore()
     img = np.arange(15, dtype=np.uint8).reshape(3, 5)

@@ -156,3 +156,29 @@ def test_fuzzed_polygon_only_message_error(pts: list[tuple[float, float]]) -> No
     except MessageError:
         return
     assert box is None or (box.is_finite() and box.w >= 0 and box.h >= 0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(width=64), min_size=9, max_size=9), st.integers(0, 5000), st.integers(0, 5000),
+       st.integers(0, 8), st.integers(0, 8), st.integers(0, 6000), st.integers(0, 6000), st.integers(0, 6000),
+       st.integers(0, 6000))
+def test_fuzzed_camera_info_only_message_error(k, width, height, bx, by, rx, ry, rw, rh) -> None:
+    msg = CameraInfo(width=width, height=height, k=k, binning_x=bx, binning_y=by)
+    msg.roi = RegionOfInterest(x_offset=rx, y_offset=ry, width=rw, height=rh)
+    try:
+        intr = intrinsics_from_camera_info(msg)
+    except MessageError:
+        return
+    assert intr.fx > 0 and intr.fy > 0 and intr.width > 0 and intr.height > 0
+    assert all(math.isfinite(v) for v in (intr.fx, intr.fy, intr.cx, intr.cy))
+
+
+@settings(max_examples=200, deadline=None)
+@given(*[st.integers(0, 2**32 - 1)] * 4)
+def test_fuzzed_roi_only_message_error(x: int, y: int, w: int, h: int) -> None:
+    try:
+        box = box_from_roi(RegionOfInterest(x_offset=x, y_offset=y, width=w, height=h))
+    except MessageError:
+        assert w == 0 or h == 0
+        return
+    assert box.is_valid()

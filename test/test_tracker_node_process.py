@@ -94,6 +94,16 @@ class Probe:
                 return stamp
         raise AssertionError(f"no /track/state for frame {stamp}")
 
+    def select(self, pixels: np.ndarray, centre: tuple[float, float]) -> None:
+        """Send /track/init for a TW x TW box at `centre`; publish the still frame until the track starts."""
+        x, y = round(centre[0] - TW / 2), round(centre[1] - TW / 2)
+        self.init.publish(RegionOfInterest(x_offset=x, y_offset=y, width=TW, height=TW))
+        for _ in range(40):
+            if track_state_from_msg(self.states[self.frame(pixels)]) is TrackState.TRACKING:
+                return
+            self.spin_until(lambda: False, 0.1)
+        raise AssertionError("the tracker never started tracking after /track/init")
+
     def raw(self, msg) -> None:
         """Publish a (malformed) message and give the tracker time to take it before anything else."""
         if isinstance(msg, Image):
@@ -161,10 +171,12 @@ def follow(probe: Probe, path: list[tuple[float, float]], mono8: bool, seed0: in
 def test_installed_tracker_follows_a_moving_target(processes: ProcessSet, probe: Probe, mono8: bool) -> None:
     proc = start_tracker(processes, probe)
     start = (60.0, 70.0)
-    probe.frame(to_mono8(scene(*start)) if mono8 else scene(*start))  # idle: nothing selected yet
-    probe.init.publish(RegionOfInterest(x_offset=round(start[0] - TW / 2), y_offset=round(start[1] - TW / 2),
-                                        width=TW, height=TW))
-    probe.spin_until(lambda: False, 0.3)
+    still = to_mono8(scene(*start)) if mono8 else scene(*start)
+    stamp = probe.frame(still)
+    assert track_state_from_msg(probe.states[stamp]) is TrackState.IDLE  # nothing selected yet
+    assert probe.spin_until(lambda: stamp in probe.boxes, 5.0)
+    assert box_from_polygon(probe.boxes[stamp]) is None and not probe.errors  # empty polygon, no error
+    probe.select(still, start)
     path = [(start[0] + 3.0 * i, start[1] + 1.5 * i) for i in range(40)]
     frames = follow(probe, path, mono8)
     fx = (W / 2) / math.tan(math.radians(FOV_DEG / 2))
@@ -203,10 +215,7 @@ def malformed_messages() -> list:
 def test_installed_tracker_survives_malformed_input(processes: ProcessSet, probe: Probe) -> None:
     proc = start_tracker(processes, probe)
     start = (80.0, 90.0)
-    probe.frame(scene(*start))
-    probe.init.publish(RegionOfInterest(x_offset=round(start[0] - TW / 2), y_offset=round(start[1] - TW / 2),
-                                        width=TW, height=TW))
-    probe.spin_until(lambda: False, 0.3)
+    probe.select(scene(*start), start)
     follow(probe, [(start[0] + 2.0 * i, start[1]) for i in range(5)], mono8=False)
     for msg in malformed_messages():
         probe.raw(msg)

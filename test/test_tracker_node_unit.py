@@ -24,7 +24,7 @@ from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros.errors import ParameterError
-from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode
+from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode, params_yaml
 from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
 from swir_tracker_ros.tracker import TrackerParams
 from swir_tracker_ros.types import TrackState
@@ -103,6 +103,7 @@ def test_malformed_and_stale_frames_are_counted_not_raised(context: Context) -> 
         values, trouble = node.stats.report(1.0)
         assert values["window_dropped_malformed"] == 2 and values["window_dropped_stale"] == 1
         assert values["window_processed"] == 2 and trouble
+        assert node._warned["image"][1] == 1  # the second malformed-image warning was held back (throttled)
         assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
     finally:
         node.destroy_node()
@@ -235,12 +236,49 @@ def test_debug_image_only_with_subscribers(context: Context) -> None:
         node.destroy_node()
 
 
-def test_params_file_lists_every_parameter_with_its_default() -> None:
+def test_params_file_and_docs_list_every_parameter() -> None:
+    """params/tracker.yaml declares exactly the node's and the core's parameters with valid values
+    (regenerate it with `tracker --params-yaml`), and docs/tracker_node.md documents each one."""
     doc = yaml.safe_load((REPO / "params" / "tracker.yaml").read_text())["/**"]["ros__parameters"]
     core = doc.pop("tracker")
-    for cls, values in ((TrackerNodeParams, doc), (TrackerParams, core)):
-        defaults = {f.name: f.default if f.default is not dataclasses.MISSING else f.default_factory()
-                    for f in dataclasses.fields(cls)}
-        assert set(values) == set(defaults), cls.__name__
-        for name, value in values.items():
-            assert value == pytest.approx(defaults[name]), name
+    docs = (REPO / "docs" / "tracker_node.md").read_text()
+    for prefix, cls, values in (("", TrackerNodeParams, doc), ("tracker.", TrackerParams, core)):
+        names = {f.name for f in dataclasses.fields(cls)}
+        assert set(values) == names, f"{cls.__name__}: run `tracker --params-yaml > params/tracker.yaml`"
+        cls(**values).validate()
+        missing = [n for n in names if f"`{prefix}{n}`" not in docs]
+        assert not missing, f"docs/tracker_node.md lacks {missing}"
+
+
+def test_generated_params_yaml_loads_back_to_the_defaults() -> None:
+    doc = yaml.safe_load(params_yaml())["/**"]["ros__parameters"]
+    core = doc.pop("tracker")
+    assert TrackerNodeParams(**doc) == TrackerNodeParams()
+    assert TrackerParams(**core) == TrackerParams()
+
+
+def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:
+    node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0], fov_h_deg=30.0)
+    try:
+        feed(node, scene(100, 96), 1.0)  # initialises the track
+        seen: list[tuple[float, float]] = []
+        update = node.tracker.update
+
+        def spy(frame, ego_shift=(0.0, 0.0), **kw):
+            seen.append(ego_shift)
+            return update(frame, ego_shift=ego_shift, **kw)
+
+        node.tracker.update = spy
+        for t, pan in ((0.95, 0.0), (1.05, 0.01), (1.15, 0.02)):
+            node._on_joint_state(JointState(header=header(t), name=["pan", "tilt"], position=[pan, 0.0]))
+        feed(node, scene(100, 96), 1.05)
+        feed(node, scene(100, 96), 1.15)
+        fx = (W / 2) / math.tan(math.radians(15.0))
+        # pan +0.01 rad (left) per frame moves the scene right by fx * tan(0.01) pixels
+        assert seen[-1][0] == pytest.approx(fx * math.tan(0.01)) and seen[-1][1] == pytest.approx(0.0)
+        node.set_parameters([Parameter("ego_motion_compensation", value=False)])
+        node._on_joint_state(JointState(header=header(1.25), name=["pan", "tilt"], position=[0.03, 0.0]))
+        feed(node, scene(100, 96), 1.25)
+        assert seen[-1] == (0.0, 0.0)
+    finally:
+        node.destroy_node()

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Identity-labelled pedestrian crops for the Siamese nets: MOT gt, thermal re-id, sequences, synthetic crowds."""
+"""Identity-labelled pedestrian crops for the Siamese nets: MOT gt, thermal re-id, sequences, synthetic."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from swir_tracker_ros.acquisition.crowd import background, make_identity, render_sprite, CrowdScene
+from swir_tracker_ros.acquisition.crowd import CrowdScene, background, make_identity, render_sprite
 from swir_tracker_ros.acquisition.siamese import INPUT_SIZE, crop_resized
 from swir_tracker_ros.types import Box
 
 MARGIN = 1.125  # crops are cut 12.5 % larger so random 64x64 windows give box jitter
-RAW = int(round(INPUT_SIZE * MARGIN))
+RAW = round(INPUT_SIZE * MARGIN)
 HELD_OUT_TUD = (3, 7)  # TUD-Campus identities never used for training (the runtime test uses them)
 SEQUENCES = ("otb_crossing", "otb_jogging-1", "otb_walking2", "ptbtir_airplane")
 
@@ -49,7 +49,8 @@ def mot_crops(seq_dir: Path, ids: tuple[int, ...] | None = None, exclude: tuple[
 def sequence_crops(seq_dir: Path, step: int = 4) -> dict[str, list[np.ndarray]]:
     """Crops of the single target of a tracking sequence (gt.txt lines x,y,w,h, 0-based)."""
     rows = np.loadtxt(seq_dir / "gt.txt", delimiter=",", ndmin=2)
-    crops = [_cut(_load(seq_dir / f"{k + 1:06d}.png"), Box(*r[:4])) for k, r in enumerate(rows) if k % step == 0]
+    crops = [_cut(_load(seq_dir / f"{k + 1:06d}.png"), Box(*r[:4]))
+             for k, r in enumerate(rows) if k % step == 0]
     return {seq_dir.name: crops}
 
 

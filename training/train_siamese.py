@@ -45,7 +45,7 @@ PART = {"filters": (16, 16, 12), "embed": 30}
 
 
 class Embedding(nn.Module):
-    """conv3x3 -> ReLU -> maxpool2 -> dropout 0.25, three times; FC128 -> ReLU -> dropout 0.1; FC(d) -> ReLU."""
+    """conv3x3, ReLU, maxpool2, dropout 0.25 (three times); FC128, ReLU, dropout 0.1; FC(d), ReLU."""
 
     def __init__(self, size: int, filters: tuple[int, int, int], embed: int) -> None:
         super().__init__()
@@ -118,7 +118,8 @@ def inputs(batch: np.ndarray) -> list[torch.Tensor]:
     """Whole patches and their four quadrants as NCHW tensors, in NET_NAMES order."""
     quads = [split_quadrants(p) for p in batch]
     out = [torch.from_numpy(np.ascontiguousarray(batch[:, None]))]
-    out += [torch.from_numpy(np.ascontiguousarray(np.stack([q[i] for q in quads])[:, None])) for i in range(4)]
+    for i in range(4):
+        out.append(torch.from_numpy(np.ascontiguousarray(np.stack([q[i] for q in quads])[:, None])))
     return out
 
 
@@ -158,8 +159,9 @@ def train(shared: Path, out_dir: Path, steps: int, batch: int) -> dict:
             for n in nets:
                 n.eval()
             acc = pair_accuracy(nets, val_pairs)
-            print(f"step {step:4d} loss {float(loss.detach()):.4f} val acc {' '.join(f'{x:.3f}' for x in acc)} "
-                  f"({time.time() - t0:.0f} s)", flush=True)
+            accs = " ".join(f"{x:.3f}" for x in acc)
+            print(f"step {step:4d} loss {float(loss.detach()):.4f} val acc {accs} ({time.time() - t0:.0f} s)",
+                  flush=True)
     for n in nets:
         n.eval()
     acc = pair_accuracy(nets, val_pairs)

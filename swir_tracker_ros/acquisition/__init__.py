@@ -1,2 +1,2 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Target acquisition: detection, multi-pedestrian association (paper 004), Siamese appearance and hand-off."""
+"""Target acquisition: detection, multi-pedestrian association (paper 004), Siamese nets, hand-off."""

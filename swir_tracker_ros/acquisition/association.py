@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Gated cost matrix and optimal assignment: C = mu + m, mu = theta + w3*tau + gamma (paper 004 eq. 1, 2, 7, 11)."""
+"""Gated cost matrix and optimal assignment: C = mu + m, mu = theta + w3 tau + gamma (paper 004 eq. 11)."""
 
 from __future__ import annotations
 
@@ -101,7 +101,8 @@ def assign(C: np.ndarray, max_cost: float) -> tuple[list[tuple[int, int]], list[
     matches: list[tuple[int, int]] = []
     if n and m:
         rows, cols = linear_sum_assignment(C)
-        matches = [(int(r), int(c)) for r, c in zip(rows, cols) if C[r, c] <= max_cost and C[r, c] < FORBIDDEN]
+        matches = [(int(r), int(c)) for r, c in zip(rows, cols)
+                   if C[r, c] <= max_cost and C[r, c] < FORBIDDEN]
     mr = {r for r, _ in matches}
     mc = {c for _, c in matches}
     return matches, [r for r in range(n) if r not in mr], [c for c in range(m) if c not in mc]

@@ -127,8 +127,8 @@ def render(scene: CrowdScene, k: int, bg: np.ndarray | None = None) -> tuple[np.
     order = sorted(scene.walkers, key=lambda wk: (wk.depth, wk.box(k).y + wk.box(k).h))
     for wk in order:
         b = wk.box(k)
-        x0, y0 = int(round(b.x)), int(round(b.y))
-        sw, sh = int(round(b.w)), int(round(b.h))
+        x0, y0 = round(b.x), round(b.y)
+        sw, sh = round(b.w), round(b.h)
         sprite, mask = render_sprite(wk.identity, sw, sh, 0.35 * k * np.hypot(*wk.velocity))
         xs0, ys0 = max(0, x0), max(0, y0)
         xs1, ys1 = min(scene.width, x0 + sw), min(scene.height, y0 + sh)
@@ -139,8 +139,8 @@ def render(scene: CrowdScene, k: int, bg: np.ndarray | None = None) -> tuple[np.
         img[ys0:ys1, xs0:xs1][sub_m] = sprite[ys0 - y0 : ys1 - y0, xs0 - x0 : xs1 - x0][sub_m]
         owner[ys0:ys1, xs0:xs1][sub_m] = wk.identity.id
     for oc in scene.occluders:
-        x0, y0 = int(round(oc.box.x)), int(round(oc.box.y))
-        x1, y1 = int(round(oc.box.x + oc.box.w)), int(round(oc.box.y + oc.box.h))
+        x0, y0 = round(oc.box.x), round(oc.box.y)
+        x1, y1 = round(oc.box.x + oc.box.w), round(oc.box.y + oc.box.h)
         img[max(0, y0):y1, max(0, x0):x1] = oc.level
         owner[max(0, y0):y1, max(0, x0):x1] = -1
     rng = np.random.default_rng(scene.seed * 100003 + k)
@@ -159,14 +159,15 @@ def render(scene: CrowdScene, k: int, bg: np.ndarray | None = None) -> tuple[np.
 def simulated_detections(gts: list[GroundTruth], rng: np.random.Generator, *, min_visibility: float = 0.5,
                          miss_rate: float = 0.05, jitter: float = 0.04, fp_rate: float = 0.05,
                          size: tuple[int, int] = (640, 480)) -> list[Detection]:
-    """Detector stand-in (notes seed-004 Section 6): visible GT boxes with misses, jitter and false positives."""
+    """Detector stand-in (notes seed-004 Section 6): visible GT boxes, misses, jitter, false positives."""
     dets = []
     for g in gts:
         if g.visibility < min_visibility or rng.random() < miss_rate:
             continue
         b = g.box
         j = rng.normal(0.0, jitter, 4) * np.array([b.w, b.h, b.w, b.h])
-        dets.append(Detection(Box(b.x + j[0], b.y + j[1], b.w + j[2], b.h + j[3]), float(rng.uniform(0.6, 1.0))))
+        box = Box(b.x + j[0], b.y + j[1], b.w + j[2], b.h + j[3])
+        dets.append(Detection(box, float(rng.uniform(0.6, 1.0))))
     if rng.random() < fp_rate:
         h = float(rng.uniform(40, 120))
         dets.append(Detection(Box(float(rng.uniform(0, size[0] - h / 2)), float(rng.uniform(0, size[1] - h)),

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Engineered appearance: base score (paper 004 eq. 1) and edge-orientation uniform-LBP descriptor (eq. 8-10)."""
+"""Engineered appearance: base score (paper 004 eq. 1) and edge-orientation uniform LBP (eq. 8-10)."""
 
 from __future__ import annotations
 
@@ -59,8 +59,8 @@ def to_gray8(frame: np.ndarray, bit_depth: int | None = None) -> np.ndarray:
 def crop(gray: np.ndarray, box: Box) -> np.ndarray | None:
     """Pixels of box clipped to the image, or None when less than 2x2 pixels remain."""
     h, w = gray.shape[:2]
-    x0, y0 = max(0, int(round(box.x))), max(0, int(round(box.y)))
-    x1, y1 = min(w, int(round(box.x + box.w))), min(h, int(round(box.y + box.h)))
+    x0, y0 = max(0, round(box.x)), max(0, round(box.y))
+    x1, y1 = min(w, round(box.x + box.w)), min(h, round(box.y + box.h))
     if x1 - x0 < 2 or y1 - y0 < 2:
         return None
     return gray[y0:y1, x0:x1]
@@ -108,7 +108,8 @@ def rms_distance(a: np.ndarray, b: np.ndarray) -> float:
 LBP_SIZE = (48, 96)  # (w, h) the gray-level crop is resized to before its uniform LBP (project choice)
 
 
-def describe(gray: np.ndarray, box: Box, *, edge_size: tuple[int, int] = (100, 200), cell: int = 10) -> Appearance:
+def describe(gray: np.ndarray, box: Box, *, edge_size: tuple[int, int] = (100, 200),
+             cell: int = 10) -> Appearance:
     """Engineered features of one box in a uint8 gray frame (AcquisitionError when the box is off the image).
 
     The gray-level LBP runs on the crop resized to LBP_SIZE so that its cost and its histogram do not
@@ -130,8 +131,9 @@ def base_appearance_cost(
 ) -> float:
     """theta(i, j) of paper 004 eq. (1): weighted LBP, mean, variance, height, width, class and overlap terms.
 
-    Normalisation (project choice): hL = half the L1 distance of the histograms (in [0, 1]), mu_s = |dmean|/255,
-    sigma_s = |dstd|/128, hs and ws relative to the larger size, cs = 1 - detection score, os = 1 - IoU.
+    Normalisation (project choice): hL = half the L1 distance of the histograms (in [0, 1]),
+    mu_s = |dmean|/255, sigma_s = |dstd|/128, hs and ws relative to the larger size,
+    cs = 1 - detection score, os = 1 - IoU.
     """
     h_l = 0.5 * float(np.abs(a_i.lbp - a_j.lbp).sum())
     mu_s = abs(a_i.mean - a_j.mean) / 255.0

@@ -102,7 +102,8 @@ class MotionDetector:
             x, y, w, h = cv2.boundingRect(c)
             if w * h >= self.params.min_area:
                 fill = cv2.contourArea(c) / float(w * h)
-                dets.append(Detection(Box(float(x), float(y), float(w), float(h)), float(min(1.0, 0.5 + fill / 2))))
+                box = Box(float(x), float(y), float(w), float(h))
+                dets.append(Detection(box, float(min(1.0, 0.5 + fill / 2))))
         return dets
 
 
@@ -160,7 +161,8 @@ class MotDetFile:
             if r[6] < min_score:
                 continue
             # MOT boxes are 1-based; score squashed to (0, 1) for the class term of eq. (1).
-            det = Detection(Box(r[2] - 1.0, r[3] - 1.0, r[4], r[5]), float(min(1.0, max(0.0, r[6] / score_scale))))
+            score = float(min(1.0, max(0.0, r[6] / score_scale)))
+            det = Detection(Box(r[2] - 1.0, r[3] - 1.0, r[4], r[5]), score)
             self.by_frame.setdefault(int(r[0]), []).append(det)
         self.frame = 0
 

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Hand-off to the single-object tracker: select by ID, automatic confirmation, candidates for a lost target."""
+"""Hand-off to the single-object tracker: select by ID, automatic confirmation, lost-target candidates."""
 
 from __future__ import annotations
 
@@ -10,8 +10,13 @@ import numpy as np
 
 from swir_tracker_ros.acquisition.association import CostWeights
 from swir_tracker_ros.acquisition.descriptors import Appearance, rms_distance, siamese_distance
-from swir_tracker_ros.acquisition.motion import box_from_state, box_model, initial_covariance, measurement
-from swir_tracker_ros.acquisition.motion import state_from_box
+from swir_tracker_ros.acquisition.motion import (
+    box_from_state,
+    box_model,
+    initial_covariance,
+    measurement,
+    state_from_box,
+)
 from swir_tracker_ros.kalman.standard import predict, update
 from swir_tracker_ros.types import Box
 
@@ -82,7 +87,8 @@ class AutoInitialiser:
                     c.updates += 1
             if c.updates >= p.required_updates and confirmed is None:
                 confirmed = box_from_state(c.x)
-        self.candidates = [c for c in self.candidates if c.frames < p.window and c.updates < p.required_updates]
+        self.candidates = [c for c in self.candidates
+                           if c.frames < p.window and c.updates < p.required_updates]
         for k, b in enumerate(boxes):
             if k not in used and b.is_valid():
                 r = p.r_rel * b.h
@@ -107,5 +113,6 @@ def appearance_distance(a: Appearance, b: Appearance, w: CostWeights) -> float:
 def lost_candidates(target: Appearance, tracks: Sequence[TrackView], w: CostWeights,
                     k: int = 3) -> list[tuple[int, float]]:
     """The k displayed tracks most similar to the lost target: (track id, distance), most similar first."""
-    scored = [(t.id, appearance_distance(target, t.appearance, w)) for t in tracks if t.appearance is not None]
+    scored = [(t.id, appearance_distance(target, t.appearance, w))
+              for t in tracks if t.appearance is not None]
     return sorted(scored, key=lambda s: s[1])[:k]

@@ -18,7 +18,7 @@ def _transitions(code: int) -> int:
 
 
 def uniform_lut() -> np.ndarray:
-    """256-entry lookup table: uniform codes (<= 2 circular transitions) to 0..57 in code order, others to 58."""
+    """256-entry table: uniform codes (<= 2 circular transitions) to 0..57 in code order, others to 58."""
     lut = np.full(256, N_BINS - 1, dtype=np.int64)
     nxt = 0
     for code in range(256):

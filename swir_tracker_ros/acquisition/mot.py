@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Multi-pedestrian tracking by detection with the life cycle of paper 004 Section 3.1 (Kalman track per target)."""
+"""Multi-pedestrian tracking by detection, life cycle of paper 004 Section 3.1 (a Kalman track per target)."""
 
 from __future__ import annotations
 
@@ -60,8 +60,8 @@ class MotParams:
     history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
     drift_threshold: int = _f(15, "a drifting track missed this many more frames is deleted", 1, 1000)
     display_max_miss: int = _f(2, "a confirmed track is output while missed at most this many frames (the "
-                               "paper shows it until it drifts, 20; coasting boxes are mostly false positives)",
-                               0, 1000)
+                               "paper shows it until it drifts, 20; coasting boxes are mostly false "
+                               "positives)", 0, 1000)
     history_len: int = _f(10, "positions kept for the motion pattern", 2, 100)
     siamese_min_w: int = _f(19, "Siamese nets only for boxes at least this wide (px)", 1, 10000)
     siamese_min_h: int = _f(50, "Siamese nets only for boxes at least this tall (px)", 1, 10000)
@@ -207,9 +207,8 @@ class MultiTargetTracker:
         t.hits += 1
         t.misses = 0
         t.matched = True
-        if t.status is TrackStatus.TENTATIVE and t.hits > p.confirm_hits:
-            t.status = TrackStatus.CONFIRMED
-        elif t.status is TrackStatus.DRIFTING:
+        confirm = t.status is TrackStatus.TENTATIVE and t.hits > p.confirm_hits
+        if confirm or t.status is TrackStatus.DRIFTING:
             t.status = TrackStatus.CONFIRMED
 
     def _miss(self, t: Track) -> None:

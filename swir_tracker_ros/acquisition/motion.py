@@ -9,7 +9,7 @@ import numpy as np
 
 from swir_tracker_ros.types import Box
 
-# State x = [cx, cy, w, h, vx, vy]: constant-velocity centre, random-walk size; measurement z = [cx, cy, w, h].
+# State x = [cx, cy, w, h, vx, vy]: constant-velocity centre, random-walk size; z = [cx, cy, w, h].
 STATE_DIM = 6
 MEAS_DIM = 4
 

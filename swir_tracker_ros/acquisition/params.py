@@ -32,12 +32,13 @@ class AcquisitionParams:
     """Topics, detector choice, hand-off behaviour and the detectors' settings."""
 
     image_topic: str = _f("/camera/image_raw", "input sensor_msgs/Image topic", read_only=True)
-    joint_states_topic: str = _f("/positioner/joint_states", "head joint states for ego-motion", read_only=True)
+    joint_states_topic: str = _f("/positioner/joint_states", "head joint states for ego-motion",
+                                 read_only=True)
     detector: str = _f("motion", "detector: motion (background subtraction) or hog (OpenCV people)",
                        choices=DETECTORS)
     fov_h_deg: float = _f(8.0, "horizontal field of view (deg) for the ego-motion shift", 0.1, 179.0)
     ego_motion_compensation: bool = _f(True, "compensate detector and predictions for the head's motion")
-    auto_handoff: bool = _f(False, "hand off a confirmed moving target by itself while the tracker is idle/lost")
+    auto_handoff: bool = _f(False, "hand off a confirmed moving target by itself (tracker idle or lost)")
     candidates: int = _f(3, "tracks offered when the single-object tracker reports lost", 1, 50)
     publish_debug: bool = _f(True, "publish /acquisition/debug_image (only with subscribers)")
     motion_learning_rate: float = _f(0.02, "background model update rate", 1e-4, 1.0)
@@ -65,7 +66,8 @@ class AcquisitionParams:
 
     def make_detector(self) -> Detector:
         if self.detector == "hog":
-            return HogPeopleDetector(HogParams(hit_threshold=self.hog_hit_threshold, upscale=self.hog_upscale))
+            hog = HogParams(hit_threshold=self.hog_hit_threshold, upscale=self.hog_upscale)
+            return HogPeopleDetector(hog)
         return MotionDetector(MotionParams(learning_rate=self.motion_learning_rate,
                                            threshold_sigma=self.motion_threshold_sigma,
                                            min_area=self.motion_min_area, open_size=self.motion_open_size,

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Inference of the five Siamese embedding nets (paper 004 Section 3.2.1) from ONNX with OpenCV's DNN module."""
+"""Inference of the five Siamese embedding nets (paper 004 Section 3.2.1): ONNX run by OpenCV's DNN."""
 
 from __future__ import annotations
 

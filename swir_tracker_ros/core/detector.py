@@ -41,6 +41,8 @@ class FilterBank:
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         self.kind = p.feature
         self.cell = p.cell_size if p.feature == "hog" else 1
+        self.gain = 1.0
+        self.reference_peak = p.dcf_reference_peak
         self.exclusion = max(1, math.ceil(p.psr_exclusion_px / self.cell))
         self.model_scale = 0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
         gray = p.feature == "gray"
@@ -69,7 +71,13 @@ class FilterBank:
         return extract_features(sample_patches(img, windows, self.tw, self.th), self.kind, self.cell)
 
     def initialise(self, img: np.ndarray, box: Box) -> None:
+        """First-frame training; DCF-CA also calibrates its response gain on its own training sample."""
+        self.gain = 1.0
         self.train(img, box, 1.0)
+        if isinstance(self.filter, DCFCA) and self.reference_peak > 0:
+            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+            self_peak = float(self.filter.respond(self.features(img, [win])).max())
+            self.gain = self.reference_peak / self_peak if self_peak > 1e-12 else 1.0
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         """Learn from the window around `box` (DCF-CA: plus 4 context windows one target size away)."""
@@ -85,6 +93,8 @@ class FilterBank:
                ) -> list[Detection]:
         """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
         responses = self.filter.respond(self.features(img, windows))
+        if self.gain != 1.0:
+            responses = responses * self.gain
         scales = scales if scales is not None else [1.0] * len(windows)
         out = []
         for win, s, resp in zip(windows, scales, responses):  # one entry per window (<= 45), not per pixel

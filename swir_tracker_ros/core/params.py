@@ -45,6 +45,9 @@ class TrackerParams:
     dcf_lambda1: float = _f(1e-4, "DCF-CA ridge regularisation lambda1", 1e-8, 1.0)
     dcf_lambda2: float = _f(25.0, "DCF-CA context regularisation lambda2", 0.0, 1000.0)
     dcf_interp_factor: float = _f(0.015, "DCF-CA learning rate delta (eq. 4.92)", 0.0, 1.0)
+    dcf_reference_peak: float = _f(0.29, "(ours) DCF-CA responses are scaled so that the first-frame self-response "
+                                   "peaks at this value (dissertation Fig. 4.6 level, the scale eq. 6.9 "
+                                   "expects); 0: raw responses", 0.0, 10.0)
     output_sigma_factor: float = _f(0.1, "Gaussian label sigma = sqrt(w h) x factor / cell", 0.01, 1.0)
     scale_step: float = _f(0.05, "relative size step of the scale samples (paper 000: 5 %)", 0.0, 0.3)
     n_scales: int = _f(5, "scale samples around the predicted size (1, 3 or 5)", 1, 5)

@@ -187,7 +187,8 @@ def summarise(rec: RunRecords) -> RunSummary:
         camera_fps=(len(frames_in) - 1) / span if frames_in else 0.0,
         tracker_fps=(len(outputs) - 1) / span if outputs else 0.0,
         latency_p50_ms=_stat(latency, 50), latency_p95_ms=_stat(latency, 95),
-        lost_frames=sum(st == "lost" for st in s.state), final_state=s.state[-1] if n else "",
+        lost_frames=sum(st == "lost" for st in s.state),
+        final_state=next((r[2] for r in reversed(rec.state) if r[0] <= t1 + 1e-6), ""),
         initial_offset_deg=[math.degrees(s.pan_error[0]), math.degrees(s.tilt_error[0])] if n else [],
         head_travel_deg=travel, episodes=[asdict(e) for e in episodes],
     )

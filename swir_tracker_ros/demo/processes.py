@@ -9,6 +9,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +53,16 @@ class Managed:
     log: Path
     returncode: int | None = None
     how: str = "running"  # "exited" (by itself), "sigint", "sigterm", "sigkill"
+    cpu_s: float = float("nan")  # user + system CPU seconds, read just before the stop signal
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a live process (Linux /proc), NaN when unavailable."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return float("nan")
 
 
 @dataclass
@@ -70,7 +81,8 @@ class ProcessGroup:
         """Start argv; with capture_first_line, stdout is a pipe so `first_line` can read it."""
         self.log_dir.mkdir(parents=True, exist_ok=True)
         log = self.log_dir / f"{name}.log"
-        fh = log.open("wb")
+        log.write_bytes(b"")
+        fh = log.open("ab")  # O_APPEND: stderr and the first-line copy never overwrite each other
         stdout = subprocess.PIPE if capture_first_line else fh
         try:
             proc = subprocess.Popen(
@@ -114,6 +126,8 @@ class ProcessGroup:
     def stop(self, managed: Managed, timeout: float = 8.0) -> int:
         """SIGINT, wait; SIGTERM, wait; SIGKILL as the last resort. Returns the exit code."""
         proc = managed.proc
+        if proc.poll() is None:
+            managed.cpu_s = cpu_seconds(proc.pid)
         if proc.poll() is not None:
             if managed.how == "running":
                 managed.how = "exited"
@@ -139,7 +153,7 @@ class ProcessGroup:
         report: dict[str, dict[str, object]] = {}
         for managed in reversed(self.started):
             code = self.stop(managed)
-            report[managed.name] = {"returncode": code, "how": managed.how}
+            report[managed.name] = {"returncode": code, "how": managed.how, "cpu_s": round(managed.cpu_s, 2)}
         return report
 
     def dead(self) -> list[Managed]:
@@ -149,7 +163,6 @@ class ProcessGroup:
 
 def _drain_to_log(managed: Managed) -> None:
     """Copy a piped stdout to the log in a daemon thread so the child never blocks on a full pipe."""
-    import threading
 
     def pump() -> None:
         assert managed.proc.stdout is not None

@@ -165,7 +165,8 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
         md.append(f"- ego-motion compensation {tag}: {eps}")
     md += ["", "## Processes", ""]
     for label, exits in extras.get("processes", {}).items():
-        ends = (f"{n} exit {v['returncode']} ({v['how']})" for n, v in exits.items())
+        ends = (f"{n} exit {v['returncode']} ({v['how']}, {v.get('cpu_s', float('nan')):.1f} s CPU)"
+                for n, v in exits.items())
         md.append(f"- {label}: " + ", ".join(ends))
     md += ["", "![centring error](plots/centring_error.png)", "", "![head angles](plots/head_angles.png)", ""]
     (out / "report.md").write_text("\n".join(md))

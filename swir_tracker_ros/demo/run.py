@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import signal
 import sys
 import time
 from dataclasses import dataclass
@@ -120,6 +121,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        # Started in the background by a non-interactive shell: SIGINT is ignored and the children would
+        # inherit that across exec; restore it so Ctrl-C and the SIGINT stop of every process work.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         p = load_demo_params(args.params)
         if args.duration is not None:

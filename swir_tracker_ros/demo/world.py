@@ -112,3 +112,14 @@ class SceneClock:
 
     def finished(self, now: float) -> bool:
         return self.started_at is not None and now - self.started_at >= self.duration_s
+
+
+def initial_target_box(scene: str = "demo", seed: int = 7, hfov_deg: float = 8.0, width: int = 576,
+                       height: int = 504, pan: float = 0.0, tilt: float = 0.0) -> list[float]:
+    """[x, y, w, h] of the target at scene time 0 seen from (pan, tilt): a `tracker` init_box parameter."""
+    from swir_tracker_ros.scene.camera import CameraView
+
+    built = build_scene(scene, seed)
+    actor = built.world.actor(built.target_id)
+    box = built.world.box_in_view(actor.place(0.0), CameraView(pan, tilt, hfov_deg, width, height))
+    return [round(box.x, 1), round(box.y, 1), round(box.w, 1), round(box.h, 1)]

@@ -74,12 +74,12 @@ class BagInfo:
 
 def write_bag(out: Path, frames: Iterable[FrameRecord], *, storage: str = "sqlite3",
               compress: str | None = None, camera_info: dict[str, Any] | None = None,
-              custom: dict[str, str] | None = None, frame_id: str = "camera") -> int:
+              custom: dict[str, str] | None = None, frame_id: str = "camera", version: int = 9) -> int:
     """Write frames to a new rosbag2 directory `out` (version 9); returns the number of frames written.
 
     Topics: /camera/image_raw (mono8/mono16), /camera/camera_info (if given: width, height, k, d),
     /ground_truth/box (PolygonStamped, empty = absent) and /ground_truth/occluded (Bool, when known).
-    Messages are logged at their header stamps.
+    Messages are logged at their header stamps. `version`: rosbag2 metadata version, 8 or 9.
     """
     out = Path(out)
     plugin = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}.get(storage)
@@ -90,7 +90,7 @@ def write_bag(out: Path, frames: Iterable[FrameRecord], *, storage: str = "sqlit
     ts = mb.typestore()
     n = 0
     try:
-        with _open_writer(out, plugin, compress) as w:
+        with _open_writer(out, plugin, compress, version) as w:
             for key, value in (custom or {}).items():
                 w.set_custom_data(key, value)
             img_c = w.add_connection(IMAGE_TOPIC, mb.IMAGE, typestore=ts)
@@ -116,8 +116,10 @@ def write_bag(out: Path, frames: Iterable[FrameRecord], *, storage: str = "sqlit
     return n
 
 
-def _open_writer(out: Path, plugin: StoragePlugin, compress: str | None) -> Writer:
-    w = Writer(out, version=9, storage_plugin=plugin)
+def _open_writer(out: Path, plugin: StoragePlugin, compress: str | None, version: int) -> Writer:
+    if version not in (8, 9):
+        raise HarnessError(f"{out}: rosbags writes metadata version 8 or 9, not {version}")
+    w = Writer(out, version=version, storage_plugin=plugin)
     if compress:
         if compress != "zstd":
             raise HarnessError(f"{out}: only zstd compression is supported, got {compress!r}")

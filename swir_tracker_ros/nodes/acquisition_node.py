@@ -14,7 +14,13 @@ from sensor_msgs.msg import Image, JointState, RegionOfInterest
 from std_msgs.msg import UInt32
 from visualization_msgs.msg import MarkerArray
 
-from msg_adapters.acquisition import CANDIDATES_NS, TrackBox, render_tracks_debug, selected_id, tracks_to_markers
+from msg_adapters.acquisition import (
+    CANDIDATES_NS,
+    TrackBox,
+    render_tracks_debug,
+    selected_id,
+    tracks_to_markers,
+)
 from msg_adapters.camera_info import intrinsics_from_fov
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_roi, ego_shift
@@ -48,7 +54,7 @@ class AcquisitionNode(Node):
         self.auto = AutoInitialiser(self.params.auto_init())
         self.views: list[TrackView] = []
         self.tracker_state = TrackState.IDLE
-        self.awaiting_tracker = False  # a box was sent; wait for the tracker to report before auto-sending again
+        self.awaiting_tracker = False  # a box was sent: no automatic hand-off until the tracker reports
         self.target_id: int | None = None
         self.target_app: Appearance | None = None
         self.pose: tuple[float, float] | None = None
@@ -62,7 +68,8 @@ class AcquisitionNode(Node):
         self.create_subscription(JointState, self.params.joint_states_topic, self._guard(self._on_joints),
                                  SENSOR_QOS)
         self.create_subscription(UInt32, "/acquisition/select", self._guard(self._on_select), OUTPUT_QOS)
-        self.create_subscription(DiagnosticArray, "/track/state", self._guard(self._on_track_state), OUTPUT_QOS)
+        self.create_subscription(DiagnosticArray, "/track/state", self._guard(self._on_track_state),
+                                 OUTPUT_QOS)
         self.get_logger().info(f"acquisition on {self.params.image_topic}: detector {self.params.detector}, "
                                f"siamese {'on' if self.mot_params.use_siamese else 'off'}, "
                                f"auto hand-off {'on' if self.params.auto_handoff else 'off'}")
@@ -136,14 +143,15 @@ class AcquisitionNode(Node):
         self.target_app = next((v.appearance for v in self.views if v.id == track_id), None)
         self.awaiting_tracker = True
         self.auto.reset()
-        self.get_logger().info(f"hand-off of track {track_id} at {tuple(round(v, 1) for v in box.as_tuple())}")
+        where = tuple(round(v, 1) for v in box.as_tuple())
+        self.get_logger().info(f"hand-off of track {track_id} at {where}")
 
     def _on_select(self, msg: UInt32) -> None:
         track_id = selected_id(msg)
         box = select(self.views, track_id)
         if box is None:
             known = sorted(v.id for v in self.views)
-            self.get_logger().warning(f"/acquisition/select: no displayed track {track_id}; displayed: {known}")
+            self.get_logger().warning(f"/acquisition/select: no displayed track {track_id}; shown: {known}")
             return
         self._hand_off(track_id, box)
 
@@ -153,7 +161,7 @@ class AcquisitionNode(Node):
             self.get_logger().info(f"tracker lost track {self.target_id}; offering candidates")
         if state in (TrackState.TRACKING, TrackState.OCCLUDED) or (
                 state is TrackState.LOST and self.tracker_state is not TrackState.LOST):
-            self.awaiting_tracker = False  # the tracker answered: a new automatic hand-off is allowed when idle/lost
+            self.awaiting_tracker = False  # the tracker answered: automatic hand-off allowed again
         self.tracker_state = state
 
 

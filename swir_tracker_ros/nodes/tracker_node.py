@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+import textwrap
 import time
 
 import rclpy
@@ -62,6 +63,7 @@ class TrackerNode(Node):
         self.frame_key: tuple | None = None
         self.prev_pose: tuple[float, float] | None = None
         self.window_start = time.monotonic()
+        self._warned: dict[str, tuple[float, int]] = {}  # kind -> (time of the last warning, held back)
         p = self.params
         self.pub_box = self.create_publisher(PolygonStamped, "/track/box", OUTPUT_QOS)
         self.pub_error = self.create_publisher(Vector3Stamped, "/track/pan_tilt_error", OUTPUT_QOS)
@@ -86,12 +88,18 @@ class TrackerNode(Node):
                 fn(*args)
             except Exception as exc:  # a callback must never take the node down
                 self.stats.errors += 1
-                self.get_logger().error(f"{fn.__name__} failed: {type(exc).__name__}: {exc}",
-                                        throttle_duration_sec=self.params.warn_throttle_s)
+                self._warn(fn.__name__, f"{fn.__name__} failed: {type(exc).__name__}: {exc}")
         return wrapped
 
-    def _warn(self, text: str) -> None:
-        self.get_logger().warning(text, throttle_duration_sec=self.params.warn_throttle_s)
+    def _warn(self, kind: str, text: str) -> None:
+        """A warning of one kind at most every `warn_throttle_s`, saying how many were held back."""
+        now = time.monotonic()
+        last, held = self._warned.get(kind, (-1e18, 0))
+        if now - last < self.params.warn_throttle_s:
+            self._warned[kind] = (last, held + 1)
+            return
+        self._warned[kind] = (now, 0)
+        self.get_logger().warning(text + (f" ({held} similar since the last warning)" if held else ""))
 
     def _on_image(self, msg: Image) -> None:
         t_recv = time.perf_counter()
@@ -104,7 +112,7 @@ class TrackerNode(Node):
             frame = image_to_numpy(msg)
         except MessageError as exc:
             self.stats.malformed += 1
-            self._warn(f"dropped a malformed image: {exc}")
+            self._warn("image", f"dropped a malformed image: {exc}")
             return
         self.stats.frame_stamp(stamp)
         self.last_stamp = stamp
@@ -131,13 +139,13 @@ class TrackerNode(Node):
         try:
             self.camera_intr = intrinsics_from_camera_info(msg)
         except MessageError as exc:
-            self._warn(f"ignoring CameraInfo, using the FOV fallback: {exc}")
+            self._warn("camera_info", f"ignoring CameraInfo, using the FOV fallback: {exc}")
 
     def _on_joint_state(self, msg: JointState) -> None:
         try:
             pan, tilt, stamp = joint_state_to_pan_tilt(msg)
         except MessageError as exc:
-            self._warn(f"ignoring a joint state: {exc}")
+            self._warn("joint_state", f"ignoring a joint state: {exc}")
             return
         self.poses.add(stamp, pan, tilt)
 
@@ -145,7 +153,7 @@ class TrackerNode(Node):
         try:
             self.pending_init = box_from_roi(msg)
         except MessageError as exc:
-            self._warn(f"ignoring /track/init: {exc}")
+            self._warn("init", f"ignoring /track/init: {exc}")
             return
         self.get_logger().info(f"target selected: {self.pending_init.as_tuple()} (starts on the next frame)")
 
@@ -163,6 +171,10 @@ class TrackerNode(Node):
     def _on_node_params(self, params: TrackerNodeParams) -> None:
         if params.init_box and params.init_box != self.params.init_box:
             self.pending_init = Box(*params.init_box)
+        if params.diagnostics_period_s != self.params.diagnostics_period_s:
+            self.destroy_timer(self.diag_timer)
+            self.diag_timer = self.create_timer(params.diagnostics_period_s,
+                                                self._guard(self._publish_diagnostics))
         self.params = params
 
     def _on_tracker_params(self, params: TrackerParams) -> None:
@@ -199,7 +211,7 @@ class TrackerNode(Node):
             self.pending_init = _scale_box(self.pending_init, nw / ow, nh / oh)
         elif was_active:
             self.pending_init = _scale_box(self.last_box, nw / ow, nh / oh)
-        self._warn(f"image format changed from {old} to {key}; tracker re-initialised"
+        self._warn("format", f"image format changed from {old} to {key}; tracker re-initialised"
                    + (f" on {self.pending_init.as_tuple()}" if self.pending_init else ""))
 
     def _intrinsics(self, width: int, height: int) -> Intrinsics:
@@ -222,7 +234,7 @@ class TrackerNode(Node):
             try:
                 fresh.init(pixels, box, **hint)
             except TrackerError as exc:
-                self._warn(f"cannot start tracking {box.as_tuple()}: {exc}")
+                self._warn("init", f"cannot start tracking {box.as_tuple()}: {exc}")
             else:
                 self.tracker = fresh
                 result = TrackResult(box=box, state=TrackState.TRACKING, measured=True)
@@ -231,8 +243,7 @@ class TrackerNode(Node):
         if self.tracker.state is TrackState.IDLE:
             self.last_result = None
             return None
-        else:
-            result = self.tracker.update(pixels, ego_shift=shift, **hint)
+        result = self.tracker.update(pixels, ego_shift=shift, **hint)
         self.last_result = result
         if result.state in ACTIVE:
             self.last_box = result.box
@@ -272,7 +283,8 @@ def _scale_box(box: Box, sx: float, sy: float) -> Box:
 
 def usage() -> str:
     """`tracker --help`: how to start the node and every parameter with its default."""
-    lines = ["usage: tracker [--ros-args --params-file params/tracker.yaml -p name:=value ...]",
+    lines = ["usage: tracker [--help | --params-yaml]",
+             "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
              "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
     for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
         for f in dataclasses.fields(cls):
@@ -281,12 +293,47 @@ def usage() -> str:
     return "\n".join(lines)
 
 
+def _yaml_value(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, list):
+        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
+    return repr(value)
+
+
+def params_yaml() -> str:
+    """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
+    lines = ["# Parameters of the `tracker` node (docs/tracker_node.md); `tracker --params-yaml` regenerates",
+             "# this file with the defaults. Ranges are enforced; invalid runtime changes are rejected.",
+             "# Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml",
+             "/**:", "  ros__parameters:"]
+    for cls, indent in ((TrackerNodeParams, 4), (TrackerParams, 6)):
+        if cls is TrackerParams:
+            lines.append("    tracker:  # the tracking core (swir_tracker_ros.tracker.TrackerParams)")
+        for f in dataclasses.fields(cls):
+            meta = f.metadata
+            doc = str(meta.get("doc", ""))
+            if "choices" in meta:
+                doc += f" {{{', '.join(map(str, meta['choices']))}}}"
+            elif "min" in meta or "max" in meta:
+                doc += f" [{meta.get('min', '-inf')}, {meta.get('max', 'inf')}]"
+            lines += [" " * indent + "# " + part for part in textwrap.wrap(doc, 104 - indent)]
+            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            lines.append(" " * indent + f"{f.name}: {_yaml_value(default)}")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Console entry point `tracker`: spin until SIGINT/SIGTERM; exit 2 on a bad parameter."""
     args = list(sys.argv if argv is None else argv)
     user_args = rclpy.utilities.remove_ros_args(args)[1:]
     if "-h" in user_args or "--help" in user_args:
         print(usage())
+        return 0
+    if "--params-yaml" in user_args:
+        sys.stdout.write(params_yaml())
         return 0
     rclpy.init(args=args)
     node = None

@@ -100,14 +100,15 @@ class FrameStats:
     _periods: deque = field(default_factory=lambda: deque(maxlen=50))
 
     def frame_stamp(self, stamp: float) -> None:
-        """Count frames skipped between stamps, from the median frame period of recent frames.
+        """Count frames skipped between stamps, from the source's frame period (10th percentile of the
+        recent intervals, so that the estimate holds while every other frame is being skipped).
 
         A gap of more than 1.5 periods counts round(gap / period) - 1 skipped frames; a gap beyond
         10 periods is a pause of the source, not skipping, and is neither counted nor learnt.
         """
         if self._last_stamp > 0 and stamp > self._last_stamp:
             dt = stamp - self._last_stamp
-            period = float(np.median(self._periods)) if len(self._periods) >= 5 else 0.0
+            period = float(np.percentile(self._periods, 10)) if len(self._periods) >= 5 else 0.0
             if period > 0 and dt > 10 * period:
                 dt = 0.0
             elif period > 0 and dt > 1.5 * period:

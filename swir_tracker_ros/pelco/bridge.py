@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from swir_tracker_ros.pelco import codec
 from swir_tracker_ros.pelco.controller import STOP, MotionCommand, PanTiltController
-from swir_tracker_ros.pelco.link import Log, SerialLink, _quiet
+from swir_tracker_ros.pelco.link import Log, SerialLink, no_log
 from swir_tracker_ros.pelco.params import PositionerParams
 from swir_tracker_ros.pelco.units import raw_to_angle, wrap_rad
 from swir_tracker_ros.types import TrackState
@@ -60,7 +60,7 @@ class PositionerBridge:
     (re)connection is a stop. `shutdown()` writes a stop and closes the port.
     """
 
-    def __init__(self, params: PositionerParams, link: SerialLink | None = None, *, log: Log = _quiet,
+    def __init__(self, params: PositionerParams, link: SerialLink | None = None, *, log: Log = no_log,
                  clock: Callable[[], float] = time.monotonic) -> None:
         self.p = params.validate()
         self.log, self.clock = log, clock

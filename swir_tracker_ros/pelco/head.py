@@ -27,6 +27,8 @@ class HeadConfig:
 
 
 class _Joint:
+    wraps = False  # pan wraps at +-180 deg, tilt does not
+
     def __init__(self, angle: float) -> None:
         self.angle = angle  # deg, our convention
         self.velocity = 0.0  # deg/s
@@ -45,8 +47,6 @@ class _Joint:
         step = accel * dt if accel > 0 else abs(dv)
         self.velocity += min(max(dv, -step), step)
         self.angle += self.velocity * dt
-
-    wraps = False
 
 
 class _Pan(_Joint):

@@ -12,7 +12,7 @@ import serial
 Log = Callable[[str, str], None]  # (level: "info" | "warn", text)
 
 
-def _quiet(level: str, text: str) -> None:
+def no_log(level: str, text: str) -> None:
     """Default logger: drop messages (nodes pass their own)."""
 
 
@@ -24,7 +24,7 @@ class SerialLink:
     A failure is logged once per outage; the retry delay doubles from `backoff_min` to `backoff_max`.
     """
 
-    def __init__(self, url: str, baudrate: int = 9600, *, log: Log = _quiet, backoff_min: float = 0.2,
+    def __init__(self, url: str, baudrate: int = 9600, *, log: Log = no_log, backoff_min: float = 0.2,
                  backoff_max: float = 5.0, write_timeout: float = 0.2,
                  clock: Callable[[], float] = time.monotonic) -> None:
         self.url, self.baudrate = url, baudrate

@@ -92,7 +92,11 @@ class Simulator:
     def run(self) -> int:
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1):
             signal.signal(sig, self._on_signal)
-        print(self.transport.open(), flush=True)
+        try:
+            print(self.transport.open(), flush=True)
+        except OSError as exc:
+            print(f"pelco_sim: cannot open the port: {exc}", file=sys.stderr)
+            return 2
         self.connected = True
         t0 = last = time.monotonic()
         next_trace = t0

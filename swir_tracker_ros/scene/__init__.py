@@ -19,7 +19,7 @@ Coordinates
     ``Truth`` sorted by id, one per pedestrian/vehicle (static occluders have none).
     ``render_radiance(t, view)`` gives float32 radiance in [0, 1] without sensor effects.
     Deterministic: the same (seed, t, view, sensor) always gives the same frame. About 5-7 ms per
-    576x504 frame (benchmarks/scene_speed.py); twice that with interlacing.
+    576x504 frame (`python -m swir_tracker_ros.scene NAME` prints it); twice that with interlacing.
     ``ids``, ``actor(id)``, ``box_in_view(placement, view)``.
 
 ``Truth(id, kind, box, visible_fraction, occlusion, occluded, in_view, range_m, azimuth, elevation)``

@@ -123,9 +123,13 @@ class World:
         region += alpha * (rad - region)
         return _Layer(p.range_m, slice(y0, y1), slice(x0, x1), alpha)
 
-    def render_radiance(self, t: float, view: CameraView) -> tuple[np.ndarray, list[Truth]]:
-        """Scene radiance (float32 in [0, 1]) and truths at time t, without sensor effects."""
-        img = self._background(view)
+    def render_radiance(self, t: float, view: CameraView, background: np.ndarray | None = None
+                        ) -> tuple[np.ndarray, list[Truth]]:
+        """Scene radiance (float32 in [0, 1]) and truths at time t, without sensor effects.
+
+        `background`: this view's panorama resampling, when the caller already has it (it is modified).
+        """
+        img = self._background(view) if background is None else background
         placed = [(o, o.place(t)) for o in self.objects]
         placed.sort(key=lambda op: -op[1].range_m)  # painter's algorithm: far first
         layers: list[tuple[Object, Placement, Box, _Layer | None]] = []
@@ -184,9 +188,11 @@ class World:
         if s.shake_px > 0:
             dx, dy = shake_offset(t, s.shake_px, self.seed)
             view = view.shifted(dx / view.fx, dy / view.fy)
-        img, truths = self.render_radiance(t, view)
-        if s.interlaced:
-            late, _ = self.render_radiance(t + 0.5 / s.fps, view)
+        bg = self._background(view)
+        late_bg = bg.copy() if s.interlaced else None
+        img, truths = self.render_radiance(t, view, bg)
+        if late_bg is not None:  # the head pose is per frame; only the objects move between the fields
+            late, _ = self.render_radiance(t + 0.5 / s.fps, view, late_bg)
             img[1::2] = late[1::2]
         rng = np.random.default_rng([self.seed, 7200, round(t * 1e4) & 0x7FFFFFFF])
         return apply_sensor(img, s, self.pattern(view.width, view.height, s), rng), truths

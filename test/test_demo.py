@@ -1,0 +1,162 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The closed-loop demo: scoring, parameters, the launch file, and a shortened end-to-end run."""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+import re
+import subprocess
+import sys
+
+import pytest
+from conftest import REPO, executable
+
+from swir_tracker_ros.demo.analysis import occlusion_episodes, series, summarise
+from swir_tracker_ros.demo.config import DemoParams, load_demo_params
+from swir_tracker_ros.demo.processes import DemoError
+from swir_tracker_ros.demo.recording import RunRecords
+from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
+from swir_tracker_ros.demo.run import pty_url
+
+CAM = {"width": 576, "height": 504, "fx": 4118.0, "fy": 4118.0, "cx": 288.0, "cy": 252.0}
+
+
+def synthetic_records(ego: bool = True, recover: bool = True) -> RunRecords:
+    """25 fps, 6 s: the head closes a 2 deg offset; target hidden 2.0-3.0 s; tracker re-acquires (or not)."""
+    rec = RunRecords(label="synthetic", ego_motion_compensation=ego, duration_s=6.0, camera=dict(CAM),
+                     outcome="completed")
+    t_start = 1000.0
+    for k in range(151):
+        t = k / 25.0
+        stamp = t_start + t
+        err = math.radians(2.0) * math.exp(-t)  # pan error decays as the head turns
+        visible = 0.0 if 2.0 <= t <= 3.0 else 1.0
+        u = 288.0 - CAM["fx"] * math.tan(err)
+        gt = [u - 17.0, 200.0, 34.0, 100.0]
+        rec.truth.append([stamp, t, 1.0, visible, err, 0.0, -err + math.radians(2.0), 0.0])
+        rec.gt.append([stamp, gt])
+        lost = not recover and t > 2.0
+        box = [u - 17.0 + (80.0 if lost else 2.0), 201.0, 34.0, 100.0]
+        rec.track.append([stamp, stamp + 0.03, box])
+        state = "lost" if lost else ("occluded" if visible == 0.0 else "tracking")
+        rec.state.append([stamp, stamp + 0.03, state])
+        rec.error.append([stamp, stamp + 0.03, err, 0.0])
+        rec.frames.append([stamp, stamp + 0.005])
+        rec.joints.append([stamp, stamp, math.radians(2.0) - err, 0.0])
+    rec.truth.insert(0, [t_start - 0.04, 0.0, 1.0, 1.0, math.radians(2.0), 0.0, 0.0, 0.0])  # paused frame
+    return rec
+
+
+def test_summary_scores_a_synthetic_run() -> None:
+    s = summarise(synthetic_records())
+    assert s.frames == 150 and s.in_view_fraction == 1.0 and s.in_view_at_end  # t = 0: scene paused
+    assert s.occlusions == 1 and s.occlusions_survived == 1
+    assert s.initial_offset_deg[0] == pytest.approx(2.0 * math.exp(-0.04))
+    assert s.head_travel_deg[0] == pytest.approx(2.0 * (math.exp(-0.04) - math.exp(-6.0)), abs=0.01)
+    assert s.latency_p50_ms == pytest.approx(30.0, abs=0.5)
+    assert s.camera_fps == pytest.approx(25.0, rel=0.01) and s.tracker_fps == pytest.approx(25.0, rel=0.01)
+    assert s.precision_20px == 1.0 and s.final_state == "tracking"
+    assert 0.0 < s.centring_error_mean_deg < s.centring_error_p95_deg < 2.0
+
+
+def test_an_occlusion_that_loses_the_target_is_not_survived() -> None:
+    rec = synthetic_records(recover=False)
+    episodes = occlusion_episodes(series(rec))
+    assert len(episodes) == 1 and not episodes[0].survived
+    assert episodes[0].start == pytest.approx(2.0) and episodes[0].end == pytest.approx(3.0)
+    assert summarise(rec).lost_frames > 0
+
+
+def test_target_out_of_view_counts_against_time_in_view() -> None:
+    rec = synthetic_records()
+    for row in rec.truth[-50:]:
+        row[4] = math.radians(5.0)  # beyond the 4 deg half field of view
+    s = summarise(rec)
+    assert not s.in_view_at_end
+    assert s.time_in_view_s == pytest.approx(4.0, abs=0.1)
+
+
+def test_reports_and_plots_are_written(tmp_path) -> None:
+    runs = [(r, summarise(r)) for r in (synthetic_records(True), synthetic_records(False, recover=False))]
+    plots = make_plots(tmp_path, runs, [tmp_path / "missing.csv"] * 2)
+    assert all(p.stat().st_size > 10_000 for p in plots)
+    paths = write_reports(tmp_path, [s for _, s in runs], {"files": {"plot": "plots/centring_error.png"}})
+    data = json.loads(paths["json"].read_text())
+    assert [r["ego_motion_compensation"] for r in data["runs"]] == [True, False]
+    assert "occlusions survived" in paths["md"].read_text()
+    assert "<table>" in paths["html"].read_text()
+    table = text_table([s for _, s in runs])
+    assert "ego-motion compensation ON" in table and "ego-motion compensation OFF" in table
+
+
+def test_demo_params_file_and_validation(tmp_path) -> None:
+    p = load_demo_params()  # params/demo.yaml
+    assert p.scene == "demo" and p.duration_s > 0
+    assert p.with_duration(3.0).duration_s == 3.0
+    bad = tmp_path / "demo.yaml"
+    bad.write_text("demo:\n  scene: nowhere\n")
+    with pytest.raises(DemoError, match="scene"):
+        load_demo_params(bad)
+    bad.write_text("demo:\n  duration: 3\n")
+    with pytest.raises(DemoError, match="unknown demo parameters"):
+        load_demo_params(bad)
+    with pytest.raises(DemoError, match="duration_s"):
+        DemoParams(duration_s=0.0).validate()
+
+
+def test_pty_url_from_pelco_sim_first_line() -> None:
+    assert pty_url("PTY /dev/pts/7") == "/dev/pts/7"
+    assert pty_url("TCP 127.0.0.1:4001") == "socket://127.0.0.1:4001"
+    with pytest.raises(DemoError):
+        pty_url("hello")
+
+
+def test_launch_file_compiles_and_references_real_executables_and_params() -> None:
+    path = REPO / "launch" / "demo.launch.py"
+    source = path.read_text()
+    compile(source, str(path), "exec")
+    tree = ast.parse(source)
+    names = {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and isinstance(n.value, str)}
+    scripts = re.findall(r'"(\w+) = swir_tracker_ros', (REPO / "setup.py").read_text())
+    for exe in ("pelco_sim", "positioner_bridge", "scene_camera", "tracker"):
+        assert exe in names and exe in scripts, exe
+    for params in re.findall(r'_params\("([\w.]+)"\)', source):
+        assert (REPO / "params" / params).is_file(), params
+    assert len(re.findall(r'_params\("([\w.]+)"\)', source)) == 3
+    assert "generate_launch_description" in {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
+
+
+# --------------------------------------------------------------------------- end to end
+def test_shortened_demo_end_to_end(tmp_path) -> None:
+    """A few seconds of the real graph: the head turns towards the pedestrian, who is in view at the end."""
+    out = tmp_path / "demo"
+    proc = subprocess.run([executable("demo"), "--out", str(out), "--duration", "5", "--no-ego-compare"],
+                          capture_output=True, text=True, timeout=150)
+    logs = "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-1500:]}"
+                     for p in sorted(out.glob("*/logs/*.log")))
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:] + logs
+    data = json.loads((out / "summary.json").read_text())
+    (run,) = data["runs"]
+    assert run["outcome"] == "completed"
+    pan0, tilt0 = run["initial_offset_deg"]
+    assert pan0 > 1.0 and tilt0 < -0.3  # the pedestrian starts left of and below the optical axis
+    # The head turned towards the pedestrian: left and down, by a visible amount.
+    assert run["head_travel_deg"][0] > 0.5 and run["head_travel_deg"][1] < -0.2, run
+    assert run["in_view_at_end"], run
+    assert run["frames"] > 25
+    exits = data["processes"]["ego_on"]
+    assert set(exits) == {"pelco_sim", "positioner_bridge", "scene_camera", "tracker", "demo_supervisor"}
+    for name, end in exits.items():
+        assert end["returncode"] == 0 and end["how"] in ("sigint", "exited"), (name, end)
+    assert (out / "ego_on" / "bag" / "metadata.yaml").is_file()
+    assert (out / "ego_on" / "debug.mp4").stat().st_size > 10_000
+    assert (out / "report.html").is_file() and (out / "plots" / "head_angles.png").is_file()
+    assert "report:" in proc.stdout
+
+
+def test_demo_module_runs_as_script_help() -> None:
+    proc = subprocess.run([sys.executable, "-m", "swir_tracker_ros.demo.run", "--help"], capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 0 and "--no-ego-compare" in proc.stdout

@@ -1,0 +1,211 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The full Tracker: scale, occlusion and re-detection, gated updates, variants, bad input, real data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.kalman import PAPER000_KCF
+from swir_tracker_ros.tracker import Tracker, TrackerParams
+from swir_tracker_ros.types import Box, SearchMode, TrackState
+
+
+def occlusion_scene(n: int = 55, seed: int = 3) -> tuple[list[np.ndarray], list[Box], list[bool]]:
+    """A 20x40 target walks right at 2 px/frame behind a textured bar (x 100..130) and, while hidden,
+    turns to move diagonally (2, 1.5) px/frame; noisy textured background, 8-bit frames."""
+    rng = np.random.default_rng(seed)
+    h, w = 240, 320
+    bg = cv2.GaussianBlur(rng.random((h, w)).astype(np.float32), (0, 0), 3)
+    bg = 0.3 + 0.25 * (bg - bg.min()) / (bg.max() - bg.min())
+    occ = cv2.GaussianBlur(rng.random((h, 30)).astype(np.float32), (0, 0), 2)
+    occ = 0.45 + 0.2 * (occ - occ.min()) / (occ.max() - occ.min())
+    tgt = 0.1 + 0.9 * cv2.resize(rng.random((8, 4)).astype(np.float32), (20, 40), interpolation=cv2.INTER_NEAREST)
+    frames, gts, hidden = [], [], []
+    x, y = 50.0, 70.0
+    for k in range(n):
+        if k:
+            vx, vy = (2.0, 0.0) if x < 100.0 else (2.0, 1.5)
+            x, y = x + vx, y + vy
+        f = bg.copy()
+        xi, yi = round(x), round(y)
+        f[yi:yi + 40, xi:xi + 20] = tgt
+        f[:, 100:130] = occ
+        f = f + rng.normal(0, 0.015, f.shape).astype(np.float32)
+        frames.append(np.clip(f * 255, 0, 255).astype(np.uint8))
+        gts.append(Box(xi, yi, 20, 40))
+        hidden.append(xi + 20 > 100 and xi < 130)
+    return frames, gts, hidden
+
+
+def zoom_scene(n: int = 25, rate: float = 1.02) -> tuple[list[np.ndarray], list[Box]]:
+    rng = np.random.default_rng(3)
+    bg = cv2.GaussianBlur(rng.random((240, 320)).astype(np.float32), (0, 0), 3)
+    bg = 0.3 + 0.2 * (bg - bg.min()) / (bg.max() - bg.min())
+    tgt = 0.1 + 0.9 * cv2.resize(rng.random((8, 4)).astype(np.float32), (24, 48), interpolation=cv2.INTER_NEAREST)
+    frames, gts = [], []
+    for k in range(n):
+        s = rate**k
+        t = cv2.resize(tgt, (round(24 * s), round(48 * s)), interpolation=cv2.INTER_LINEAR)
+        f = bg.copy()
+        x0, y0 = round(160 - t.shape[1] / 2), round(120 - t.shape[0] / 2)
+        f[y0:y0 + t.shape[0], x0:x0 + t.shape[1]] = t
+        frames.append((f * 255).astype(np.uint8))
+        gts.append(Box(x0, y0, t.shape[1], t.shape[0]))
+    return frames, gts
+
+
+def run(variant: str, frames: list[np.ndarray], box: Box, **kw: object) -> list:
+    trk = Tracker(TrackerParams(variant=variant, **kw))
+    trk.init(frames[0], box)
+    return [trk.update(f) for f in frames[1:]]
+
+
+@pytest.fixture(scope="module")
+def scene() -> tuple[list[np.ndarray], list[Box], list[bool]]:
+    return occlusion_scene()
+
+
+@pytest.mark.parametrize("pipeline", ["kcf", "dcf_ca"])
+def test_scale_recovery_on_synthetic_zoom(pipeline: str) -> None:
+    frames, gts = zoom_scene()
+    res = run("robust_adaptive", frames, gts[0], pipeline=pipeline)
+    assert res[-1].scale == pytest.approx(1.02**24, rel=0.06)
+    assert res[-1].box.iou(gts[-1]) > 0.8
+
+
+def test_redetection_after_occlusion_with_direction_change(scene) -> None:
+    frames, gts, hidden = scene
+    res = run("robust_adaptive", frames, gts[0])
+    states = [r.state for r in res]
+    assert TrackState.OCCLUDED in states[10:40]  # failure detected behind the bar
+    occluded = [r for r in res if r.state is TrackState.OCCLUDED]
+    assert all(r.search_mode is SearchMode.MULTI_WINDOW and len(r.search_windows) == 9 for r in occluded)
+    assert all(not r.measured and not r.model_updated for r in occluded)
+    tail = range(len(res) - 10, len(res))  # target visible again, moving diagonally
+    assert not any(hidden[i + 1] for i in tail)
+    assert all(res[i].state is TrackState.TRACKING and res[i].box.iou(gts[i + 1]) > 0.6 for i in tail)
+    cf = run("cf", frames, gts[0])  # the bare filter stays behind at the occluder
+    assert max(cf[i].box.iou(gts[i + 1]) for i in tail) < 0.2
+
+
+def test_model_is_frozen_while_occluded(scene) -> None:
+    frames, gts, _ = scene
+    trk = Tracker(TrackerParams())
+    trk.init(frames[0], gts[0])
+    frozen_checked = updated_seen = False
+    for f in frames[1:40]:
+        before = trk._bank.filter.model_alphaf.copy()
+        r = trk.update(f)
+        same = np.array_equal(before, trk._bank.filter.model_alphaf)
+        assert same != r.model_updated
+        if r.model_updated:
+            updated_seen = True
+            assert r.peak > 0.5 and r.state is TrackState.TRACKING
+        if r.state is TrackState.OCCLUDED:
+            frozen_checked = True
+    assert frozen_checked and updated_seen
+
+
+def test_variants_behave_as_specified(scene) -> None:
+    frames, gts, _ = scene
+    cf = run("cf", frames[:30], gts[0])
+    assert all(r.search_mode is SearchMode.NORMAL and r.huber_threshold == 0.0 for r in cf)
+    assert all(r.state is TrackState.TRACKING and r.scale == pytest.approx(1.0) for r in cf)
+    kal = run("kalman", frames[:30], gts[0])
+    assert all(r.huber_threshold == 0.0 for r in kal)
+    assert any(r.search_mode is SearchMode.MULTI_WINDOW for r in kal)
+    rob = run("robust", frames[:30], gts[0])
+    assert all(r.huber_threshold == 1.5 for r in rob)
+    ada = run("robust_adaptive", frames[:30], gts[0])
+    assert all(r.huber_threshold == pytest.approx(PAPER000_KCF(r.peak)) for r in ada)
+    assert len({round(r.huber_threshold, 3) for r in ada}) > 2
+    trk = Tracker(TrackerParams(variant="robust_adaptive_r"))
+    trk.init(frames[0], gts[0])
+    R0 = trk._kf.R.copy()
+    for f in frames[1:] + frames[::-1]:
+        trk.update(f)
+    assert not np.array_equal(trk._kf.R[:2, :2], R0[:2, :2])  # adapted after the warm-up
+    assert np.array_equal(trk._kf.R[2:, 2:], R0[2:, 2:])  # size noise stays nominal
+
+
+def test_dcf_ca_pipeline_detects_occlusion_by_apce(scene) -> None:
+    frames, gts, _ = scene
+    res = run("robust_adaptive", frames, gts[0], pipeline="dcf_ca")
+    assert res[0].state is TrackState.TRACKING and res[0].box.iou(gts[1]) > 0.7
+    assert any(r.state is TrackState.OCCLUDED for r in res[15:40])
+
+
+def test_ego_shift_moves_the_prediction() -> None:
+    frames, gts = zoom_scene(n=3, rate=1.0)
+    moved = [np.roll(f, 6, axis=1) for f in frames]  # the head turned: image content moved 6 px right
+    trk = Tracker(TrackerParams())
+    trk.init(frames[0], gts[0])
+    r = trk.update(moved[1], ego_shift=(6.0, 0.0))
+    assert r.search_windows[0].cx == pytest.approx(gts[0].cx + 6.0)
+    assert r.box.cx == pytest.approx(gts[0].cx + 6.0, abs=1.0)
+
+
+def test_bad_input_is_reported_cleanly(scene) -> None:
+    frames, gts, _ = scene
+    trk = Tracker(TrackerParams())
+    assert trk.update(frames[0]).state is TrackState.IDLE
+    for box in [Box(400, 10, 20, 20), Box(10, 10, 0, 20), Box(float("nan"), 0, 5, 5), (1, 2, 3)]:
+        with pytest.raises(TrackerError):
+            trk.init(frames[0], box)
+    with pytest.raises(TrackerError):
+        trk.init(np.zeros((3, 3), np.uint8), Box(0, 0, 2, 2))
+    with pytest.raises(TrackerError):
+        trk.init([[0]], Box(0, 0, 1, 1))
+    trk.init(frames[0], gts[0])
+    for bad in (np.zeros((10, 10), np.uint8), np.full(frames[0].shape, np.nan, np.float32),
+                np.zeros(frames[0].shape, bool), np.zeros((*frames[0].shape, 2)), np.zeros(0)):
+        r = trk.update(bad)
+        assert r.state is TrackState.LOST and not r.measured
+    r = trk.update(frames[1])  # a bad frame is transient: the track continues
+    assert r.state is TrackState.TRACKING and r.box.iou(gts[1]) > 0.7
+    tiny = Tracker(TrackerParams())  # frame smaller than the search window: replicated borders
+    tiny.init(frames[0][60:120, 40:80], Box(10, 10, 20, 40))
+    assert tiny.update(frames[1][60:120, 40:80]).state in (TrackState.TRACKING, TrackState.OCCLUDED)
+    trk.reset()
+    assert trk.state is TrackState.IDLE
+
+
+def test_16bit_and_colour_frames_track(scene) -> None:
+    frames, gts, _ = scene
+    f16 = [f.astype(np.uint16) * 16 + 20000 for f in frames[:8]]
+    res = run("robust_adaptive", f16, gts[0], dead_pixel_threshold=0.2)
+    assert res[-1].box.iou(gts[7]) > 0.7
+    bgr = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames[:8]]
+    assert run("robust_adaptive", bgr, gts[0])[-1].box.iou(gts[7]) > 0.7
+
+
+def test_deterministic(scene) -> None:
+    frames, gts, _ = scene
+    a = run("robust_adaptive_r", frames[:30], gts[0])
+    b = run("robust_adaptive_r", frames[:30], gts[0])
+    assert a == b
+
+
+def load_sequence(path: Path) -> tuple[list[np.ndarray], list[Box]]:
+    frames = [cv2.imread(str(p), cv2.IMREAD_UNCHANGED) for p in sorted(path.glob("*.png"))]
+    gts = [Box(*map(float, line.split(","))) for line in (path / "gt.txt").read_text().split()]
+    return frames, gts
+
+
+def success_auc(boxes: list[Box], gts: list[Box]) -> float:
+    ious = np.array([b.iou(g) for b, g in zip(boxes, gts)])
+    return float(np.mean([(ious > t).mean() for t in np.arange(0, 1.0001, 0.05)]))
+
+
+def test_real_sequence_crossing_beats_the_bare_filter(sequences_dir: Path) -> None:
+    frames, gts = load_sequence(sequences_dir / "otb_crossing")
+    full = run("robust_adaptive", frames, gts[0])
+    bare = run("cf", frames, gts[0])
+    auc_full = success_auc([gts[0]] + [r.box for r in full], gts)
+    auc_bare = success_auc([gts[0]] + [r.box for r in bare], gts)
+    assert auc_full > 0.7 and auc_full > auc_bare
