@@ -77,6 +77,17 @@ def test_yaml_overrides_are_read(context: Context, tmp_path: Path) -> None:
         node.destroy_node()
 
 
+def test_integer_overrides_widen_to_float_parameters(context: Context) -> None:
+    node = make_node(context, cli_args=["--ros-args", "-p", "demo.gain:=1", "-p", "demo.box:=[1, 2, 3, 4]"])
+    try:
+        params = bind_parameters(node, DemoParams, prefix="demo.")
+        assert params.gain == 1.0 and isinstance(params.gain, float)
+        assert params.box == [1.0, 2.0, 3.0, 4.0]
+        assert node.get_parameter("demo.gain").type_ == Parameter.Type.DOUBLE
+    finally:
+        node.destroy_node()
+
+
 @pytest.mark.parametrize(("name", "value", "words"), [
     ("demo.gain", 1.5, ["demo.gain"]),
     ("demo.mode", "medium", ["demo.mode", "medium"]),

@@ -234,3 +234,9 @@ def test_installed_tracker_survives_malformed_input(processes: ProcessSet, probe
     assert int(probe.diag()["total_callback_errors"]) == 0
     assert proc.poll() is None
     assert processes.stop(proc, signal.SIGTERM) == 0, processes.log(proc)
+
+
+def test_installed_tracker_exits_2_on_a_bad_parameter(processes: ProcessSet) -> None:
+    proc = processes.start("tracker", "--ros-args", "-p", "fov_h_deg:=500.0")
+    assert proc.wait(60) == 2
+    assert "fov_h_deg" in processes.log(proc)

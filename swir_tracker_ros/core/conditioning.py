@@ -48,7 +48,7 @@ def to_gray(frame: np.ndarray) -> np.ndarray:
     return frame
 
 
-def percentile_limits(gray: np.ndarray, low: float, high: float, max_samples: int = 40000) -> tuple[float, float]:
+def percentile_limits(gray: np.ndarray, low: float, high: float, max_samples: int = 10000) -> tuple[float, float]:
     """Robust black/white levels from a regular subsample of the image (no allocation of the full sort)."""
     step = max(1, int(np.sqrt(gray.size / max_samples)))
     sample = gray[::step, ::step].ravel().astype(np.float32, copy=False)

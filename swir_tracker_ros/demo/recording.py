@@ -92,6 +92,7 @@ class RunRecords:
     frames: list[list[float]] = field(default_factory=list)  # [stamp, recv] of /camera/image_raw
     diagnostics: list[dict[str, Any]] = field(default_factory=list)  # {"recv", "name", "values"}
     debug_frames: int = 0
+    supervisor_cpu_s: float = math.nan  # CPU seconds of the recording supervisor itself
     video: str = ""
     bag: str = ""
     bag_counts: dict[str, int] = field(default_factory=dict)

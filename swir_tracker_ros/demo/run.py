@@ -101,6 +101,7 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
     finally:
         exits = group.stop_all()  # the supervisor first: it writes its records when interrupted
     records = RunRecords.load(folder / "records.json")
+    exits.get("demo_supervisor", {})["cpu_s"] = round(records.supervisor_cpu_s, 2)
     unclean = {n: e for n, e in exits.items() if e["how"] not in ("exited", "sigint") or e["returncode"] != 0}
     if unclean:
         log(f"[demo] processes that did not exit cleanly on SIGINT: {unclean}")

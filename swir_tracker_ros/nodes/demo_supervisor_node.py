@@ -244,6 +244,7 @@ class DemoSupervisor(Node):
             self.rec.video = str(path) if path else ""
         if self.rec.outcome == "running":
             self.rec.outcome = "interrupted"
+        self.rec.supervisor_cpu_s = time.process_time()
         self.rec.save(self.out / "records.json")
 
 

@@ -58,6 +58,8 @@ def _default(f: dataclasses.Field) -> Any:
 
 def _coerce(kind: type, name: str, value: Any) -> Any:
     """Python value of the dataclass field type from a ROS parameter value."""
+    if kind is list and value is None:
+        return []  # an unset (read-only, empty) array parameter
     try:
         if kind is float:
             return float(value)
@@ -129,6 +131,21 @@ def _build(cls: type[P], values: dict[str, Any], prefix: str) -> P:
     return params
 
 
+def _widen_integer_overrides(node: Node, name: str, kind: type) -> None:
+    """Let `-p x:=20` or a YAML `[1, 2]` set a float / list[float] parameter: integers become doubles.
+
+    rclpy keeps command-line and params-file overrides in `Node._parameter_overrides` until declaration.
+    """
+    overrides = getattr(node, "_parameter_overrides", None)
+    param = overrides.get(name) if isinstance(overrides, dict) else None
+    if param is None:
+        return
+    if kind is float and param.type_ == Parameter.Type.INTEGER:
+        overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(param.value))
+    elif kind is list and param.type_ == Parameter.Type.INTEGER_ARRAY:
+        overrides[name] = Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in param.value])
+
+
 def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
                     on_change: Callable[[P], None] | None = None) -> P:
     """Declare every field of the dataclass `cls` as `<prefix><field>`, read and validate the values.
@@ -148,6 +165,7 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
         kind = kinds[name]
         default = _coerce(kind, name, _default(f))
         desc = describe(f, kind, name)
+        _widen_integer_overrides(node, name, kind)
         try:
             if kind is list and not default:
                 # An empty list has no inferable type: declare by type, then fill in the empty default.

@@ -132,6 +132,7 @@ class TrackerNode(Node):
         self.stats.processed += 1
         self.stats.latency_ms.append((now - t_recv) * 1e3)
         self.stats.core_ms.append(core_ms)
+        self.stats.overhead_ms.append((now - t_recv) * 1e3 - core_ms)
         if stamp > 0:
             self.stats.age_ms.append((self.get_clock().now().nanoseconds * 1e-9 - stamp) * 1e3)
 

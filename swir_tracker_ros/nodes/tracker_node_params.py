@@ -94,6 +94,7 @@ class FrameStats:
     errors: int = 0
     latency_ms: list[float] = field(default_factory=list)  # receive -> last publish, in the node
     core_ms: list[float] = field(default_factory=list)
+    overhead_ms: list[float] = field(default_factory=list)  # in-node latency minus the core's time
     age_ms: list[float] = field(default_factory=list)  # header stamp -> publish, on the node clock
     totals: dict[str, int] = field(default_factory=dict)
     _last_stamp: float = 0.0
@@ -133,6 +134,7 @@ class FrameStats:
             "latency_ms_max": max(self.latency_ms, default=math.nan),
             "core_ms_mean": float(np.mean(self.core_ms)) if self.core_ms else math.nan,
             "core_ms_p50": pct(self.core_ms, 50), "core_ms_p99": pct(self.core_ms, 99),
+            "overhead_ms_p50": pct(self.overhead_ms, 50), "overhead_ms_p99": pct(self.overhead_ms, 99),
             "core_ms_max": max(self.core_ms, default=math.nan),
             "stamp_age_ms_p50": pct(self.age_ms, 50),
             **{f"window_{k}": v for k, v in counts.items()},
@@ -140,5 +142,5 @@ class FrameStats:
         }
         trouble = bool(self.malformed or self.skipped or self.errors or self.stale)
         self.received = self.processed = self.malformed = self.stale = self.skipped = self.errors = 0
-        self.latency_ms, self.core_ms, self.age_ms = [], [], []
+        self.latency_ms, self.core_ms, self.age_ms, self.overhead_ms = [], [], [], []
         return values, trouble

@@ -75,7 +75,7 @@ class PositionerBridge:
         self._last_sent: MotionCommand | None = None
         self._last_sent_time = -math.inf
         self._next_control = -math.inf
-        self._last_control = None
+        self._last_control: float | None = None
         self._queue: list[str] = []
         self._query: str | None = None
         self._query_time = -math.inf
