@@ -37,7 +37,9 @@ def make_frames(n: int, seed: int = 7) -> np.ndarray:
     rng = np.random.default_rng(seed)
     bg = cv2.GaussianBlur(rng.random((HEIGHT, WIDTH)).astype(np.float32), (0, 0), 4)
     bg = 0.3 + 0.2 * (bg - bg.min()) / (bg.max() - bg.min())
-    tgt = 0.15 + 0.7 * cv2.resize(rng.random((12, 4)).astype(np.float32), (24, 72), interpolation=cv2.INTER_NEAREST)
+    tgt = 0.15 + 0.7 * cv2.resize(
+        rng.random((12, 4)).astype(np.float32), (24, 72), interpolation=cv2.INTER_NEAREST
+    )
     dead = rng.integers(0, WIDTH * HEIGHT, 200)
     frames = np.empty((n, HEIGHT, WIDTH), np.uint16)
     x, y = BOX[0], BOX[1]
@@ -48,7 +50,7 @@ def make_frames(n: int, seed: int = 7) -> np.ndarray:
             x = 40.0
         f = bg.copy()
         xi, yi = round(x), round(y)
-        f[yi:yi + 72, xi:xi + 24] = tgt
+        f[yi : yi + 72, xi : xi + 24] = tgt
         f += rng.normal(0, 0.01, f.shape).astype(np.float32)
         img = np.clip(20000 + 16000 * f, 0, 65535).astype(np.uint16)
         img.reshape(-1)[dead] = 65535
@@ -111,8 +113,13 @@ def time_opencv(frames8: np.ndarray) -> dict:
         path = os.path.join(tmp, "frames8.npy")
         np.save(path, frames8)
         env = dict(os.environ, PYTHONPATH="")
-        proc = subprocess.run([str(BENCH_PY), __file__, "--opencv-child", path], capture_output=True,
-                              text=True, env=env, check=False)
+        proc = subprocess.run(
+            [str(BENCH_PY), __file__, "--opencv-child", path],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=False,
+        )
     if proc.returncode != 0:
         print(proc.stderr, file=sys.stderr)
         return {}
@@ -134,26 +141,45 @@ def main() -> None:
     print(f"{len(frames)} frames {WIDTH}x{HEIGHT} uint16, target {BOX[2]:.0f}x{BOX[3]:.0f} px, one thread")
     n_fps, n_cpu, n_frac = time_ours(frames, occlusion=False)
     o_fps, o_cpu, o_frac = time_ours(frames, occlusion=True)
-    print(f"ours normal mode (5 scales)      : {n_fps:7.1f} fps wall, {n_cpu:7.1f} fps cpu ({n_frac:.0%} normal)")
-    print(f"ours occlusion mode (9 windows)  : {o_fps:7.1f} fps wall, {o_cpu:7.1f} fps cpu ({o_frac:.0%} grid)")
+    print(
+        f"ours normal mode (5 scales)      : {n_fps:7.1f} fps wall, {n_cpu:7.1f} fps cpu "
+        f"({n_frac:.0%} normal)"
+    )
+    print(
+        f"ours occlusion mode (9 windows)  : {o_fps:7.1f} fps wall, {o_cpu:7.1f} fps cpu ({o_frac:.0%} grid)"
+    )
     ocv = time_opencv(to8bit(frames))
     kcf, csrt = ocv.get("kcf", {}), ocv.get("csrt", {})
     for name, r in (("OpenCV TrackerKCF (1 scale, 8 bit)", kcf), ("OpenCV TrackerCSRT (8 bit)", csrt)):
         if r:
             print(f"{name:33s}: {r['fps']:7.1f} fps wall, {r['cpu_fps']:7.1f} fps cpu (ok {r['ok']:.0%})")
     if kcf:
-        print(f"ratio normal / OpenCV KCF        : {n_fps / kcf['fps']:.2f} (cpu {n_cpu / kcf['cpu_fps']:.2f})")
+        print(
+            f"ratio normal / OpenCV KCF        : {n_fps / kcf['fps']:.2f} (cpu {n_cpu / kcf['cpu_fps']:.2f})"
+        )
     if csrt:
-        print(f"ratio normal / OpenCV CSRT       : {n_fps / csrt['fps']:.2f} (cpu {n_cpu / csrt['cpu_fps']:.2f})")
-    print(f"occlusion mode >= 25 fps         : {'yes' if o_fps >= 25 else 'no'} (cpu: {'yes' if o_cpu >= 25 else 'no'})")
-    print(json.dumps({
-        "normal_fps": round(n_fps, 1), "occlusion_fps": round(o_fps, 1),
-        "opencv_kcf_fps": round(kcf.get("fps", float("nan")), 1),
-        "opencv_csrt_fps": round(csrt.get("fps", float("nan")), 1),
-        "normal_cpu_fps": round(n_cpu, 1), "occlusion_cpu_fps": round(o_cpu, 1),
-        "opencv_kcf_cpu_fps": round(kcf.get("cpu_fps", float("nan")), 1),
-        "opencv_csrt_cpu_fps": round(csrt.get("cpu_fps", float("nan")), 1),
-    }))
+        print(
+            f"ratio normal / OpenCV CSRT       : {n_fps / csrt['fps']:.2f} "
+            f"(cpu {n_cpu / csrt['cpu_fps']:.2f})"
+        )
+    print(
+        f"occlusion mode >= 25 fps         : {'yes' if o_fps >= 25 else 'no'} "
+        f"(cpu: {'yes' if o_cpu >= 25 else 'no'})"
+    )
+    print(
+        json.dumps(
+            {
+                "normal_fps": round(n_fps, 1),
+                "occlusion_fps": round(o_fps, 1),
+                "opencv_kcf_fps": round(kcf.get("fps", float("nan")), 1),
+                "opencv_csrt_fps": round(csrt.get("fps", float("nan")), 1),
+                "normal_cpu_fps": round(n_cpu, 1),
+                "occlusion_cpu_fps": round(o_cpu, 1),
+                "opencv_kcf_cpu_fps": round(kcf.get("cpu_fps", float("nan")), 1),
+                "opencv_csrt_cpu_fps": round(csrt.get("cpu_fps", float("nan")), 1),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

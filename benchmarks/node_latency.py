@@ -20,6 +20,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -49,24 +50,7 @@ TARGET = 32
 # Fast DDS's built-in shared-memory segment (512 KiB) is smaller than one 640x512 mono16 frame (640 KiB),
 # so such frames travel as UDP fragments, and best-effort samples are lost whenever a fragment overflows
 # the socket buffer. A shared-memory transport with a larger segment carries them whole.
-SHM_PROFILE = """<?xml version="1.0" encoding="UTF-8"?>
-<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
-  <transport_descriptors>
-    <transport_descriptor>
-      <transport_id>shm_large</transport_id>
-      <type>SHM</type>
-      <segment_size>16777216</segment_size>
-      <maxMessageSize>4194304</maxMessageSize>
-    </transport_descriptor>
-  </transport_descriptors>
-  <participant profile_name="shm_large_participant" is_default_profile="true">
-    <rtps>
-      <userTransports><transport_id>shm_large</transport_id></userTransports>
-      <useBuiltinTransports>false</useBuiltinTransports>
-    </rtps>
-  </participant>
-</profiles>
-"""
+SHM_PROFILE_FILE = REPO / "config" / "fastdds_shm_large.xml"
 
 
 class SyntheticSequence:
@@ -120,10 +104,6 @@ class Bench(Node):
             self.diags.append(status_values(msg, DIAG_NAME))
 
 
-def spin_for(ex: SingleThreadedExecutor, seconds: float) -> None:
-    end = time.monotonic() + seconds
-    while (left := end - time.monotonic()) > 0:
-        ex.spin_once(timeout_sec=min(left, 0.005))
 
 
 def main() -> int:
@@ -135,13 +115,12 @@ def main() -> int:
     ap.add_argument("--height", type=int, default=512)
     ap.add_argument("--executable", default=str(Path(sys.prefix) / "bin" / "tracker"))
     ap.add_argument("--transport", choices=("shm", "default"), default="shm",
-                    help="shm: Fast DDS shared memory with a 16 MiB segment (profile written to a temp dir); "
+                    help="shm: Fast DDS shared memory with a 16 MiB segment (config/fastdds_shm_large.xml); "
                          "default: Fast DDS built-in transports")
     args = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="node_latency_"))
     if args.transport == "shm":
-        (tmp / "fastdds_shm.xml").write_text(SHM_PROFILE)
-        os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(tmp / "fastdds_shm.xml")  # here and in the node
+        os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(SHM_PROFILE_FILE)  # here and in the node
 
     seq = SyntheticSequence(args.width, args.height)
     cx, cy = seq.centre(0)
@@ -152,17 +131,20 @@ def main() -> int:
     proc = subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT, start_new_session=True)
     rclpy.init()
     node = Bench()
+    # Outputs are received on their own thread, so that building and pacing frames never delays them.
     ex = SingleThreadedExecutor()
     ex.add_node(node)
+    spinner = threading.Thread(target=ex.spin, daemon=True)
+    spinner.start()
     stamps: list[float] = []
     try:
         end = time.monotonic() + 60
         while node.pub.get_subscription_count() == 0 and time.monotonic() < end and proc.poll() is None:
-            spin_for(ex, 0.1)
+            time.sleep(0.1)
         if node.pub.get_subscription_count() == 0:
             print(f"tracker did not subscribe; log {log}:\n{log.read_text(errors='replace')}")
             return 1
-        spin_for(ex, 1.0)  # let discovery settle in both directions
+        time.sleep(1.0)  # let discovery settle in both directions
         period = 1.0 / args.rate
         total = args.warmup + args.frames
         nxt = time.monotonic()
@@ -172,7 +154,7 @@ def main() -> int:
         node.init.publish(RegionOfInterest(x_offset=round(cx - TARGET / 2), y_offset=round(cy - TARGET / 2),
                                            width=TARGET, height=TARGET))
         for i in range(total):
-            spin_for(ex, max(0.0, nxt - time.monotonic()))
+            time.sleep(max(0.0, nxt - time.monotonic()))
             stamp = time.time()
             msg.header.stamp = seconds_to_stamp(stamp)
             node.pub.publish(msg)
@@ -181,9 +163,10 @@ def main() -> int:
             k = max(0, i + 1 - args.warmup)
             msg = numpy_to_image(seq.frame(k), header(0.0, "swir"))  # next frame built while waiting
         wall = time.monotonic() - t_start
-        spin_for(ex, 2.5)  # drain: late answers and the last diagnostics window
+        time.sleep(2.5)  # drain: late answers and the last diagnostics window
     finally:
         ex.shutdown()
+        spinner.join(5)
         node.destroy_node()
         rclpy.try_shutdown()
         if proc.poll() is None:

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The long-term SWIR tracker: correlation filter + Kalman prediction + re-detection (paper 000, dissertation)."""
+"""Long-term SWIR tracker: correlation filter + Kalman prediction + re-detection (paper 000, dissertation)."""
 
 from __future__ import annotations
 
@@ -53,10 +53,17 @@ class Tracker:
         self.params = params if params is not None else TrackerParams()
         self.params.validate()
         p = self.params
-        self._conditioner = FrameConditioner(ConditioningConfig(
-            stretch=p.stretch, low_percentile=p.stretch_low_percentile, high_percentile=p.stretch_high_percentile,
-            stretch_smoothing=p.stretch_smoothing, dead_pixel_threshold=p.dead_pixel_threshold,
-            deinterlace=p.deinterlace, downscale=p.downscale))
+        self._conditioner = FrameConditioner(
+            ConditioningConfig(
+                stretch=p.stretch,
+                low_percentile=p.stretch_low_percentile,
+                high_percentile=p.stretch_high_percentile,
+                stretch_smoothing=p.stretch_smoothing,
+                dead_pixel_threshold=p.dead_pixel_threshold,
+                deinterlace=p.deinterlace,
+                downscale=p.downscale,
+            )
+        )
         self.reset()
 
     # ------------------------------------------------------------------ public API
@@ -80,11 +87,13 @@ class Tracker:
         self._apce_est_sum = self._apce_est_n = 0.0
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
-        """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if either is unusable."""
+        """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
         self.reset()
         box = _as_box(box)
         if not box.is_valid() or box.w < 1.0 or box.h < 1.0:
-            raise TrackerError(f"init box {box.as_tuple()} must be finite with width and height of at least 1 pixel")
+            raise TrackerError(
+                f"init box {box.as_tuple()} must be finite with width and height of at least 1 pixel"
+            )
         if not isinstance(frame, np.ndarray):
             raise TrackerError(f"frame must be a numpy array, got {type(frame).__name__}")
         if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
@@ -106,17 +115,24 @@ class Tracker:
             if p.variant == "kalman":
                 self._kf = KalmanFilter(self._model)
             else:
-                method = p.robust_method if p.robust_method != "auto" else ("A4" if p.pipeline == "kcf" else "A2")
-                self._kf = RobustKalmanFilter(self._model, influence=Huber(p.fixed_huber_threshold),
-                                              robust_components=(0, 1), method=method)
+                method = (
+                    p.robust_method if p.robust_method != "auto" else ("A4" if p.pipeline == "kcf" else "A2")
+                )
+                self._kf = RobustKalmanFilter(
+                    self._model,
+                    influence=Huber(p.fixed_huber_threshold),
+                    robust_components=(0, 1),
+                    method=method,
+                )
             self._kf.initialize(self._model.state_from_box(b), self._model.P0)
             if p.variant == "robust_adaptive_r":
                 self._noise = AdaptiveNoise(self._model.R, components=(0, 1))
         self._state = TrackState.TRACKING
 
-    def update(self, frame: np.ndarray, ego_shift: tuple[float, float] = (0.0, 0.0),
-               bit_depth: int | None = None) -> TrackResult:
-        """Track one frame. Never raises on an ndarray: unusable input gives a `lost` result for this frame."""
+    def update(
+        self, frame: np.ndarray, ego_shift: tuple[float, float] = (0.0, 0.0), bit_depth: int | None = None
+    ) -> TrackResult:
+        """Track one frame. Never raises on an ndarray: unusable input gives a `lost` result."""
         if self._state is TrackState.IDLE or self._bank is None or self._box is None:
             return TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
         if self._state is TrackState.LOST:
@@ -148,7 +164,9 @@ class Tracker:
         det = bank.detect(img, [win])[0]
         self._box = Box.from_center(det.cx, det.cy, box.w, box.h)
         bank.train(img, self._box, bank.learning_rate)
-        return self._result(self._box, TrackState.TRACKING, det=det, measured=True, updated=True, windows=(win,))
+        return self._result(
+            self._box, TrackState.TRACKING, det=det, measured=True, updated=True, windows=(win,)
+        )
 
     def _step(self, img: np.ndarray, dx: float, dy: float) -> TrackResult:
         p, bank, kf, model = self.params, self._bank, self._kf, self._model
@@ -175,13 +193,23 @@ class Tracker:
             grid = grid_windows(wins[len(wins) // 2], p.grid_overlap)
             others = [g for i, g in enumerate(grid) if i != 4]
             if p.grid_scale_search:
-                cand = [*dets, *bank.detect(img, [w.scaled(f) for w in others for f in factors],
-                                               [f for _ in others for f in factors])]
+                cand = [
+                    *dets,
+                    *bank.detect(
+                        img,
+                        [w.scaled(f) for w in others for f in factors],
+                        [f for _ in others for f in factors],
+                    ),
+                ]
             else:
                 cand = [dets[len(dets) // 2], *bank.detect(img, others)]
             det = max(cand, key=lambda d: d.peak)
             shown = tuple(grid)
-        size = (pred.w * det.scale, pred.h * det.scale) if not failed or p.grid_scale_search else (pred.w, pred.h)
+        size = (
+            (pred.w * det.scale, pred.h * det.scale)
+            if not failed or p.grid_scale_search
+            else (pred.w, pred.h)
+        )
         meas = Box.from_center(det.cx, det.cy, *size)
         k = self._threshold(det.peak)
         info = kf.update(model.measurement_from_box(meas), threshold=k)
@@ -199,8 +227,16 @@ class Tracker:
             self._occluded = 0
             state = TrackState.TRACKING
         self._state = state
-        return self._result(self._box, state, det=det, mode=mode, measured=not failed, updated=updated,
-                            windows=shown, threshold=k if k is not None else 0.0)
+        return self._result(
+            self._box,
+            state,
+            det=det,
+            mode=mode,
+            measured=not failed,
+            updated=updated,
+            windows=shown,
+            threshold=k if k is not None else 0.0,
+        )
 
     # ------------------------------------------------------------------ pieces
     def _failure(self, det: Detection) -> bool:
@@ -224,7 +260,7 @@ class Tracker:
         return (PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA)(peak)
 
     def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
-        """Confident-only model update (peak > 0.5, paper 000; APCE gate 0.583 x mean, eq. 4.97); frozen on failure."""
+        """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure."""
         p = self.params
         if failed:
             return False
@@ -246,9 +282,17 @@ class Tracker:
         h = min(max(box.h, 0.25 * h0), 4.0 * h0)
         return Box.from_center(box.cx, box.cy, w, h)
 
-    def _result(self, box: Box, state: TrackState, det: Detection | None = None,
-                mode: SearchMode = SearchMode.NORMAL, measured: bool = False, updated: bool = False,
-                windows: tuple[Box, ...] = (), threshold: float = 0.0) -> TrackResult:
+    def _result(
+        self,
+        box: Box,
+        state: TrackState,
+        det: Detection | None = None,
+        mode: SearchMode = SearchMode.NORMAL,
+        measured: bool = False,
+        updated: bool = False,
+        windows: tuple[Box, ...] = (),
+        threshold: float = 0.0,
+    ) -> TrackResult:
         inv = 1.0 / self.params.downscale
 
         def up(b: Box) -> Box:
@@ -257,6 +301,15 @@ class Tracker:
         w0, h0 = self._init_size
         scale = math.sqrt(box.w * box.h / (w0 * h0)) if w0 > 0 and h0 > 0 and box.is_valid() else 1.0
         return TrackResult(
-            box=up(box), state=state, peak=det.peak if det else 0.0, psr=det.psr if det else 0.0,
-            apce=det.apce if det else 0.0, huber_threshold=float(threshold), search_mode=mode,
-            measured=measured, scale=scale, model_updated=updated, search_windows=tuple(up(b) for b in windows))
+            box=up(box),
+            state=state,
+            peak=det.peak if det else 0.0,
+            psr=det.psr if det else 0.0,
+            apce=det.apce if det else 0.0,
+            huber_threshold=float(threshold),
+            search_mode=mode,
+            measured=measured,
+            scale=scale,
+            model_updated=updated,
+            search_windows=tuple(up(b) for b in windows),
+        )

@@ -74,7 +74,12 @@ def test_tracker_params_are_flat_documented_and_validated() -> None:
     assert (p.kcf_padding, p.kcf_lambda, p.kcf_kernel_sigma, p.kcf_interp_factor) == (1.5, 1e-4, 0.5, 0.02)
     assert (p.dcf_lambda1, p.dcf_lambda2, p.dcf_padding, p.dcf_interp_factor) == (1e-4, 25.0, 2.0, 0.015)
     assert (p.psr_threshold, p.update_peak_threshold, p.apce_occlusion_ratio) == (7.0, 0.5, 0.6)
-    for bad in (dict(variant="magic"), dict(psr_threshold=-1.0), dict(n_scales=4), dict(kcf_padding="2"),
-                dict(grid_scale_search=1)):
+    for bad in (
+        dict(variant="magic"),
+        dict(psr_threshold=-1.0),
+        dict(n_scales=4),
+        dict(kcf_padding="2"),
+        dict(grid_scale_search=1),
+    ):
         with pytest.raises(ParameterError):
             TrackerParams(**bad).validate()

@@ -25,8 +25,9 @@ def textured(h: int = 200, w: int = 240, seed: int = 0, blur: float = 2.0) -> np
 
 def shifted(img: np.ndarray, dx: float, dy: float) -> np.ndarray:
     M = np.float32([[1, 0, dx], [0, 1, dy]])
-    return cv2.warpAffine(img, M, (img.shape[1], img.shape[0]), flags=cv2.INTER_CUBIC,
-                          borderMode=cv2.BORDER_REFLECT)
+    return cv2.warpAffine(
+        img, M, (img.shape[1], img.shape[0]), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT
+    )
 
 
 def test_fhog_shape_range_and_orientation() -> None:

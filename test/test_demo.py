@@ -69,6 +69,17 @@ def test_an_occlusion_that_loses_the_target_is_not_survived() -> None:
     assert summarise(rec).lost_frames > 0
 
 
+def test_episodes_from_scene_visibility_cover_a_target_out_of_view() -> None:
+    """With the head-independent visibility, an occlusion while the head has lost the target still counts."""
+    rec = synthetic_records()
+    for row, gt, state in zip(rec.truth[1:], rec.gt, rec.state):
+        if row[1] >= 4.0:  # the target is out of the image from 4 s on and the tracker has lost it
+            row[4], gt[1], state[2] = math.radians(6.0), None, "occluded"
+    s = summarise(rec, lambda t: [0.0 if 4.4 <= x <= 5.0 or 2.0 <= x <= 3.0 else 1.0 for x in t])
+    assert [e["note"] for e in s.episodes] == ["survived", "target out of view"]
+    assert s.occlusions == 2 and s.occlusions_survived == 1
+
+
 def test_target_out_of_view_counts_against_time_in_view() -> None:
     rec = synthetic_records()
     for row in rec.truth[-50:]:

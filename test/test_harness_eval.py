@@ -86,3 +86,13 @@ def test_compare_adds_opencv_rows(crossing_bag):
     per = result.sequences["otb_crossing"]
     assert set(per) == {"cf", "opencv_mosse", "opencv_kcf"}
     assert per["opencv_kcf"].frames == 20 and per["opencv_kcf"].precision_20 > 0.5
+
+
+def test_json_round_trip_for_reuse(crossing_bag):
+    from swir_tracker_ros.harness.evaluate import EvalResult
+
+    r = evaluate([open_source(crossing_bag, max_frames=10)], ["cf"])
+    back = EvalResult.from_json(json.loads(json.dumps(r.to_json(curves=True))))
+    assert back.sequences["otb_crossing"]["cf"] == r.sequences["otb_crossing"]["cf"]
+    again = evaluate([open_source(crossing_bag, max_frames=10)], ["cf"], reuse=back)
+    assert again.sequences["otb_crossing"]["cf"] is back.sequences["otb_crossing"]["cf"]  # not re-run

@@ -55,6 +55,13 @@ def test_demo_scene_hides_the_target_while_it_stops(demo_scene) -> None:
     assert 6.0 < hidden_still[0] < 9.0
 
 
+def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> None:
+    from swir_tracker_ros.demo.world import target_visibility
+
+    vis = target_visibility(demo_scene, [0.5, 7.5, 12.0])
+    assert vis[0] > 0.9 and vis[1] < 0.05 and vis[2] > 0.9
+
+
 def test_scene_clock_holds_until_started_and_at_the_end() -> None:
     clock = SceneClock(10.0)
     assert clock.time(100.0) == 0.0 and not clock.running

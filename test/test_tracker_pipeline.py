@@ -24,7 +24,9 @@ def occlusion_scene(n: int = 55, seed: int = 3) -> tuple[list[np.ndarray], list[
     bg = 0.3 + 0.25 * (bg - bg.min()) / (bg.max() - bg.min())
     occ = cv2.GaussianBlur(rng.random((h, 30)).astype(np.float32), (0, 0), 2)
     occ = 0.45 + 0.2 * (occ - occ.min()) / (occ.max() - occ.min())
-    tgt = 0.1 + 0.9 * cv2.resize(rng.random((8, 4)).astype(np.float32), (20, 40), interpolation=cv2.INTER_NEAREST)
+    tgt = 0.1 + 0.9 * cv2.resize(
+        rng.random((8, 4)).astype(np.float32), (20, 40), interpolation=cv2.INTER_NEAREST
+    )
     frames, gts, hidden = [], [], []
     x, y = 50.0, 70.0
     for k in range(n):
@@ -33,7 +35,7 @@ def occlusion_scene(n: int = 55, seed: int = 3) -> tuple[list[np.ndarray], list[
             x, y = x + vx, y + vy
         f = bg.copy()
         xi, yi = round(x), round(y)
-        f[yi:yi + 40, xi:xi + 20] = tgt
+        f[yi : yi + 40, xi : xi + 20] = tgt
         f[:, 100:130] = occ
         f = f + rng.normal(0, 0.015, f.shape).astype(np.float32)
         frames.append(np.clip(f * 255, 0, 255).astype(np.uint8))
@@ -46,14 +48,16 @@ def zoom_scene(n: int = 25, rate: float = 1.02) -> tuple[list[np.ndarray], list[
     rng = np.random.default_rng(3)
     bg = cv2.GaussianBlur(rng.random((240, 320)).astype(np.float32), (0, 0), 3)
     bg = 0.3 + 0.2 * (bg - bg.min()) / (bg.max() - bg.min())
-    tgt = 0.1 + 0.9 * cv2.resize(rng.random((8, 4)).astype(np.float32), (24, 48), interpolation=cv2.INTER_NEAREST)
+    tgt = 0.1 + 0.9 * cv2.resize(
+        rng.random((8, 4)).astype(np.float32), (24, 48), interpolation=cv2.INTER_NEAREST
+    )
     frames, gts = [], []
     for k in range(n):
         s = rate**k
         t = cv2.resize(tgt, (round(24 * s), round(48 * s)), interpolation=cv2.INTER_LINEAR)
         f = bg.copy()
         x0, y0 = round(160 - t.shape[1] / 2), round(120 - t.shape[0] / 2)
-        f[y0:y0 + t.shape[0], x0:x0 + t.shape[1]] = t
+        f[y0 : y0 + t.shape[0], x0 : x0 + t.shape[1]] = t
         frames.append((f * 255).astype(np.uint8))
         gts.append(Box(x0, y0, t.shape[1], t.shape[0]))
     return frames, gts
@@ -162,8 +166,13 @@ def test_bad_input_is_reported_cleanly(scene) -> None:
     with pytest.raises(TrackerError):
         trk.init([[0]], Box(0, 0, 1, 1))
     trk.init(frames[0], gts[0])
-    for bad in (np.zeros((10, 10), np.uint8), np.full(frames[0].shape, np.nan, np.float32),
-                np.zeros(frames[0].shape, bool), np.zeros((*frames[0].shape, 2)), np.zeros(0)):
+    for bad in (
+        np.zeros((10, 10), np.uint8),
+        np.full(frames[0].shape, np.nan, np.float32),
+        np.zeros(frames[0].shape, bool),
+        np.zeros((*frames[0].shape, 2)),
+        np.zeros(0),
+    ):
         r = trk.update(bad)
         assert r.state is TrackState.LOST and not r.measured
     r = trk.update(frames[1])  # a bad frame is transient: the track continues

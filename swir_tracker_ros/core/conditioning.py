@@ -48,7 +48,9 @@ def to_gray(frame: np.ndarray) -> np.ndarray:
     return frame
 
 
-def percentile_limits(gray: np.ndarray, low: float, high: float, max_samples: int = 10000) -> tuple[float, float]:
+def percentile_limits(
+    gray: np.ndarray, low: float, high: float, max_samples: int = 10000
+) -> tuple[float, float]:
     """Robust black/white levels from a regular subsample of the image (no allocation of the full sort)."""
     step = max(1, int(np.sqrt(gray.size / max_samples)))
     sample = gray[::step, ::step].ravel().astype(np.float32, copy=False)
@@ -57,7 +59,7 @@ def percentile_limits(gray: np.ndarray, low: float, high: float, max_samples: in
 
 
 def suppress_dead_pixels(img: np.ndarray, threshold: float) -> np.ndarray:
-    """Replace isolated outliers (salt and pepper, stuck pixels) by the 3x3 median where |x - med| > threshold."""
+    """Replace isolated outliers (salt, stuck pixels) by the 3x3 median where |x - med| > threshold."""
     med = cv2.medianBlur(img, 3)
     return np.where(np.abs(img - med) > threshold, med, img)
 
@@ -83,11 +85,13 @@ class FrameConditioner:
         self._limits = None
 
     def __call__(self, frame: np.ndarray, bit_depth: int | None = None) -> np.ndarray:
-        """Return a float32 image in [0, 1] (downscaled by `config.downscale`); ConditioningError if unusable."""
+        """Float32 image in [0, 1], downscaled by `config.downscale`; ConditioningError if unusable."""
         cfg = self.config
         gray = to_gray(frame)
         if gray.shape[0] < 8 or gray.shape[1] < 8:
-            raise ConditioningError(f"frame of {gray.shape[1]}x{gray.shape[0]} pixels is too small to track in")
+            raise ConditioningError(
+                f"frame of {gray.shape[1]}x{gray.shape[0]} pixels is too small to track in"
+            )
         dtype = gray.dtype
         if dtype == np.bool_ or not (np.issubdtype(dtype, np.integer) or np.issubdtype(dtype, np.floating)):
             raise ConditioningError(f"frame dtype {dtype} is not an integer or float image type")

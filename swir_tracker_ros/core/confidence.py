@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Confidence of a correlation response: peak value, PSR (paper 000 eq. 10) and APCE (dissertation eq. 4.94)."""
+"""Confidence of a correlation response: peak value, PSR (paper 000 eq. 10), APCE (dissertation eq. 4.94)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Peak:
-    """Location (row, col, sub-pixel, in response cells, wrapped to [-n/2, n/2)) and confidence of a response."""
+    """Sub-pixel location (row, col in response cells, wrapped to [-n/2, n/2)) and confidence."""
 
     row: float
     col: float
@@ -66,8 +66,16 @@ def analyse(response: np.ndarray, exclusion: int = 10) -> Peak:
     idx = int(np.argmax(response))
     r, c = divmod(idx, w)
     value = float(response[r, c])
-    dr = subpixel_offset(float(response[(r - 1) % h, c]), value, float(response[(r + 1) % h, c])) if h > 2 else 0.0
-    dc = subpixel_offset(float(response[r, (c - 1) % w]), value, float(response[r, (c + 1) % w])) if w > 2 else 0.0
+    dr = (
+        subpixel_offset(float(response[(r - 1) % h, c]), value, float(response[(r + 1) % h, c]))
+        if h > 2
+        else 0.0
+    )
+    dc = (
+        subpixel_offset(float(response[r, (c - 1) % w]), value, float(response[r, (c + 1) % w]))
+        if w > 2
+        else 0.0
+    )
     row = r + dr
     col = c + dc
     if row >= h / 2:

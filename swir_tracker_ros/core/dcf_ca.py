@@ -15,12 +15,22 @@ from swir_tracker_ros.errors import ParameterError
 class DCFCAParams:
     """DCF-CA defaults of the reference code used by the dissertation (Table in seed-003 §1.1)."""
 
-    padding: float = field(default=2.0, metadata={"doc": "window = (1 + padding) x target", "min": 0.5, "max": 4.0})
+    padding: float = field(
+        default=2.0, metadata={"doc": "window = (1 + padding) x target", "min": 0.5, "max": 4.0}
+    )
     lambda1: float = field(default=1e-4, metadata={"doc": "ridge regularisation", "min": 1e-8, "max": 1.0})
-    lambda2: float = field(default=25.0, metadata={"doc": "context regularisation", "min": 0.0, "max": 1000.0})
-    interp_factor: float = field(default=0.015, metadata={"doc": "learning rate delta", "min": 0.0, "max": 1.0})
-    output_sigma_factor: float = field(default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0})
-    n_context: int = field(default=4, metadata={"doc": "context patches (up, down, left, right)", "min": 0, "max": 4})
+    lambda2: float = field(
+        default=25.0, metadata={"doc": "context regularisation", "min": 0.0, "max": 1000.0}
+    )
+    interp_factor: float = field(
+        default=0.015, metadata={"doc": "learning rate delta", "min": 0.0, "max": 1.0}
+    )
+    output_sigma_factor: float = field(
+        default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0}
+    )
+    n_context: int = field(
+        default=4, metadata={"doc": "context patches (up, down, left, right)", "min": 0, "max": 4}
+    )
     feature: str = field(default="hog", metadata={"doc": "feature type", "choices": ("hog", "gray")})
     cell_size: int = field(default=4, metadata={"doc": "feature cell in pixels", "min": 1, "max": 8})
 

@@ -44,27 +44,42 @@ class FilterBank:
         self.gain = 1.0
         self.reference_peak = p.dcf_reference_peak
         self.exclusion = max(1, math.ceil(p.psr_exclusion_px / self.cell))
-        self.model_scale = 0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
+        self.model_scale = (
+            0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
+        )
         gray = p.feature == "gray"
         if p.pipeline == "kcf":
             self.padding = p.kcf_padding
-            kp = KCFParams(padding=p.kcf_padding, lambda_=p.kcf_lambda, kernel_sigma=p.kcf_kernel_sigma,
-                           interp_factor=p.kcf_interp_factor, output_sigma_factor=p.output_sigma_factor,
-                           feature=p.feature, cell_size=self.cell)
+            kp = KCFParams(
+                padding=p.kcf_padding,
+                lambda_=p.kcf_lambda,
+                kernel_sigma=p.kcf_kernel_sigma,
+                interp_factor=p.kcf_interp_factor,
+                output_sigma_factor=p.output_sigma_factor,
+                feature=p.feature,
+                cell_size=self.cell,
+            )
             self.learning_rate = kp.interp_factor
         else:
             self.padding = p.dcf_padding
-            dp = DCFCAParams(padding=p.dcf_padding, lambda1=p.dcf_lambda1, lambda2=p.dcf_lambda2,
-                             interp_factor=p.dcf_interp_factor, output_sigma_factor=p.output_sigma_factor,
-                             feature=p.feature, cell_size=self.cell)
+            dp = DCFCAParams(
+                padding=p.dcf_padding,
+                lambda1=p.dcf_lambda1,
+                lambda2=p.dcf_lambda2,
+                interp_factor=p.dcf_interp_factor,
+                output_sigma_factor=p.output_sigma_factor,
+                feature=p.feature,
+                cell_size=self.cell,
+            )
             self.learning_rate = dp.interp_factor
         self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale)
         shape = feature_shape(self.kind, self.th, self.tw, self.cell)
         target_cells = math.sqrt(w * h) * self.model_scale / self.cell
         if gray and p.pipeline == "kcf":
             target_cells = math.sqrt(w * h) * self.model_scale
-        self.filter: KCF | DCFCA = (KCF(kp, shape, target_cells) if p.pipeline == "kcf"
-                                    else DCFCA(dp, shape, target_cells))
+        self.filter: KCF | DCFCA = (
+            KCF(kp, shape, target_cells) if p.pipeline == "kcf" else DCFCA(dp, shape, target_cells)
+        )
 
     def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
         """Windowed feature maps (N, C, rows, cols) of the image regions `windows`."""
@@ -89,8 +104,12 @@ class FilterBank:
         else:
             self.filter.train(self.features(img, [win])[0], rate)
 
-    def detect(self, img: np.ndarray, windows: Sequence[Box], scales: Sequence[float] | None = None,
-               ) -> list[Detection]:
+    def detect(
+        self,
+        img: np.ndarray,
+        windows: Sequence[Box],
+        scales: Sequence[float] | None = None,
+    ) -> list[Detection]:
         """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
         responses = self.filter.respond(self.features(img, windows))
         if self.gain != 1.0:

@@ -21,13 +21,25 @@ def _check(name: str, value: float, lo: float, hi: float) -> None:
 class KCFParams:
     """Published KCF defaults for HOG features (`KCFParams.gray()` gives the raw-pixel set)."""
 
-    padding: float = field(default=1.5, metadata={"doc": "search window = (1 + padding) x target", "min": 0.5, "max": 4.0})
-    lambda_: float = field(default=1e-4, metadata={"doc": "ridge regularisation (eq. 1)", "min": 1e-8, "max": 1.0})
-    kernel_sigma: float = field(default=0.5, metadata={"doc": "Gaussian kernel bandwidth (eq. 7)", "min": 0.01, "max": 10.0})
-    interp_factor: float = field(default=0.02, metadata={"doc": "model learning rate", "min": 0.0, "max": 1.0})
-    output_sigma_factor: float = field(default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0})
+    padding: float = field(
+        default=1.5, metadata={"doc": "search window = (1 + padding) x target", "min": 0.5, "max": 4.0}
+    )
+    lambda_: float = field(
+        default=1e-4, metadata={"doc": "ridge regularisation (eq. 1)", "min": 1e-8, "max": 1.0}
+    )
+    kernel_sigma: float = field(
+        default=0.5, metadata={"doc": "Gaussian kernel bandwidth (eq. 7)", "min": 0.01, "max": 10.0}
+    )
+    interp_factor: float = field(
+        default=0.02, metadata={"doc": "model learning rate", "min": 0.0, "max": 1.0}
+    )
+    output_sigma_factor: float = field(
+        default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0}
+    )
     feature: str = field(default="hog", metadata={"doc": "feature type", "choices": ("hog", "gray")})
-    cell_size: int = field(default=4, metadata={"doc": "feature cell in pixels (1 for gray)", "min": 1, "max": 8})
+    cell_size: int = field(
+        default=4, metadata={"doc": "feature cell in pixels (1 for gray)", "min": 1, "max": 8}
+    )
 
     @classmethod
     def gray(cls) -> KCFParams:
@@ -64,8 +76,9 @@ def irfft2(xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return sfft.irfft2(xf, s=shape, axes=(-2, -1), workers=1)
 
 
-def gaussian_correlation(zf: np.ndarray, zz: np.ndarray, xf: np.ndarray, xx: float, sigma: float,
-                         shape: tuple[int, int]) -> np.ndarray:
+def gaussian_correlation(
+    zf: np.ndarray, zz: np.ndarray, xf: np.ndarray, xx: float, sigma: float, shape: tuple[int, int]
+) -> np.ndarray:
     """Spectrum of the Gaussian kernel correlation k^{xz} for a batch (paper 000 eq. 7).
 
     zf: (N, C, rows, cols//2+1) spectra, zz: (N,) squared norms, xf: (C, rows, cols//2+1) model

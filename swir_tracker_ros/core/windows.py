@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Search-window geometry: the window around a prediction, the 5 scale samples and the 3x3 re-detection grid."""
+"""Search-window geometry: window around a prediction, the 5 scale samples, the 3x3 re-detection grid."""
 
 from __future__ import annotations
 
@@ -15,8 +15,9 @@ def search_window(cx: float, cy: float, w: float, h: float, padding: float) -> B
     return Box.from_center(cx, cy, w * (1.0 + padding), h * (1.0 + padding))
 
 
-def scale_windows(cx: float, cy: float, w: float, h: float, padding: float,
-                  factors: Sequence[float] = SCALE_FACTORS) -> list[Box]:
+def scale_windows(
+    cx: float, cy: float, w: float, h: float, padding: float, factors: Sequence[float] = SCALE_FACTORS
+) -> list[Box]:
     """Search windows for the target sizes factor * (w, h), all centred on the prediction."""
     return [search_window(cx, cy, w * f, h * f, padding) for f in factors]
 
@@ -34,7 +35,7 @@ def grid_windows(window: Box, overlap: float = 1.0 / 3.0) -> list[Box]:
 
 
 def template_size(w: float, h: float, padding: float, cell: int, scale: float) -> tuple[int, int]:
-    """Model-space window size in pixels: (1 + padding) x target x scale, rounded to whole cells (>= 4 cells)."""
+    """Model-space window in pixels: (1 + padding) x target x scale, rounded to whole cells (>= 4)."""
     tw = max(4, round(w * (1.0 + padding) * scale / cell)) * cell
     th = max(4, round(h * (1.0 + padding) * scale / cell)) * cell
     return tw, th

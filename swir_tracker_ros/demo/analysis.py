@@ -41,6 +41,7 @@ class Episode:
     end: float
     min_visible: float
     survived: bool
+    note: str = ""  # "survived", "not re-acquired", or "target out of view" (the head had already lost it)
 
 
 @dataclass
@@ -118,13 +119,18 @@ def _on_target(gt: list | None, track: list | None) -> bool:
     return d <= max(ON_TARGET_PX, 0.5 * gt[2])
 
 
-def occlusion_episodes(s: Series) -> list[Episode]:
+def occlusion_episodes(s: Series, visibility: np.ndarray | None = None) -> list[Episode]:
     """Runs of frames with visible < OCCLUDED_BELOW lasting MIN_EPISODE_S or more (gaps shorter merged).
 
-    Survived: within RECOVERY_S after the target is visible again, the tracker reports `tracking` on a box
-    whose centre is on the target (see `ON_TARGET_PX`).
+    `visibility`: the target's visible fraction per frame independent of the head (`world.target_visibility`),
+    so every run of a scene has the same episodes; without it, the rendered frames' visibility while the
+    target's centre is in view. Survived: within RECOVERY_S after the target is visible again, the tracker
+    reports `tracking` on a box whose centre is on the target (see `ON_TARGET_PX`).
     """
-    hidden = (s.visible < OCCLUDED_BELOW) & s.centre_in_view
+    if visibility is not None:
+        hidden = np.asarray(visibility) < OCCLUDED_BELOW
+    else:
+        hidden = (s.visible < OCCLUDED_BELOW) & s.centre_in_view
     runs: list[list[int]] = []
     for i in np.flatnonzero(hidden):
         if runs and s.t[i] - s.t[runs[-1][1]] <= MIN_EPISODE_S:
@@ -139,7 +145,10 @@ def occlusion_episodes(s: Series) -> list[Episode]:
         survived = any(s.state[k] == "tracking" and _on_target(s.gt[k], s.track[k]) for k in after)
         if not after:  # hidden until the end of the run: judge on the last frames instead
             survived = s.state[b] in ("tracking", "occluded")
-        episodes.append(Episode(float(s.t[a]), float(s.t[b]), float(s.visible[a:b + 1].min()), survived))
+        in_view = bool(s.centre_in_view[a:b + 2].any())
+        note = "survived" if survived else ("not re-acquired" if in_view else "target out of view")
+        vis = s.visible if visibility is None else np.asarray(visibility)
+        episodes.append(Episode(float(s.t[a]), float(s.t[b]), float(vis[a:b + 1].min()), survived, note))
     return episodes
 
 
@@ -150,7 +159,9 @@ def _stat(values: np.ndarray, q: float | None = None) -> float:
     return float(np.mean(values) if q is None else np.percentile(values, q))
 
 
-def summarise(rec: RunRecords) -> RunSummary:
+def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
+    """Scores of one run; visibility_fn(times) -> visible fractions makes the occlusion episodes
+    independent of the head (see `occlusion_episodes`)."""
     s = series(rec)
     cam = rec.camera or {"fx": math.nan, "fy": math.nan}
     n = len(s.t)
@@ -161,7 +172,8 @@ def summarise(rec: RunRecords) -> RunSummary:
         math.hypot(g[0] + g[2] / 2 - tr[0] - tr[2] / 2, g[1] + g[3] / 2 - tr[1] - tr[3] / 2)
         if g is not None and tr is not None else math.nan for g, tr in zip(s.gt, s.track)])
     pairs = np.isfinite(track_err)
-    episodes = occlusion_episodes(s)
+    visibility = np.asarray(visibility_fn(s.t)) if visibility_fn is not None and len(s.t) else None
+    episodes = occlusion_episodes(s, visibility)
     t0, t1 = (s.stamp[0], s.stamp[-1]) if n else (0.0, 0.0)
     span = max(t1 - t0, 1e-9)
     frames_in = [r for r in rec.frames if t0 <= r[0] <= t1]

@@ -160,8 +160,7 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
     md += ["", "## Occlusion episodes", ""]
     for s in summaries:
         tag = "ON" if s.ego_motion_compensation else "OFF"
-        eps = ", ".join(f"{e['start']:.1f}-{e['end']:.1f} s ({'survived' if e['survived'] else 'lost'})"
-                        for e in s.episodes) or "none"
+        eps = ", ".join(f"{e['start']:.1f}-{e['end']:.1f} s ({e['note']})" for e in s.episodes) or "none"
         md.append(f"- ego-motion compensation {tag}: {eps}")
     md += ["", "## Processes", ""]
     for label, exits in extras.get("processes", {}).items():

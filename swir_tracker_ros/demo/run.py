@@ -17,6 +17,7 @@ from swir_tracker_ros.demo.config import DemoParams, load_demo_params, params_di
 from swir_tracker_ros.demo.processes import DemoError, ProcessGroup, find_executable, ros_environment, tail
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
+from swir_tracker_ros.demo.world import build_scene, target_visibility
 
 RUN_DIRS = {True: "ego_on", False: "ego_off"}
 
@@ -105,7 +106,9 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
     unclean = {n: e for n, e in exits.items() if e["how"] not in ("exited", "sigint") or e["returncode"] != 0}
     if unclean:
         log(f"[demo] processes that did not exit cleanly on SIGINT: {unclean}")
-    return RunResult(records, summarise(records), folder, exits)
+    scene = build_scene(p.scene, p.seed)
+    return RunResult(records, summarise(records, lambda times: target_visibility(scene, list(times))), folder,
+                     exits)
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:

@@ -123,3 +123,23 @@ def initial_target_box(scene: str = "demo", seed: int = 7, hfov_deg: float = 8.0
     actor = built.world.actor(built.target_id)
     box = built.world.box_in_view(actor.place(0.0), CameraView(pan, tilt, hfov_deg, width, height))
     return [round(box.x, 1), round(box.y, 1), round(box.w, 1), round(box.h, 1)]
+
+
+def target_visibility(scene: BuiltScene, times: list[float] | tuple[float, ...], hfov_deg: float = 8.0,
+                      width: int = 144, height: int = 126) -> list[float]:
+    """Visible fraction of the target at each scene time, seen by a small camera centred on it.
+
+    Occlusion in the angular world does not depend on where the head looks, so this is the same for
+    every run of a scene: the demo scores occlusion episodes on it (a quarter-size view keeps it cheap).
+    """
+    from swir_tracker_ros.scene.camera import CameraView
+
+    world = scene.world
+    actor = world.actor(scene.target_id)
+    out = []
+    for t in times:
+        az, _hw, el_top, el_bot, _r = world.angles(actor.place(float(t)))
+        view = CameraView(az, 0.5 * (el_top + el_bot), hfov_deg, width, height)
+        _img, truths = world.render_radiance(float(t), view)
+        out.append(next((tr.visible_fraction for tr in truths if tr.id == scene.target_id), 0.0))
+    return out

@@ -135,7 +135,16 @@ def cmd_compare(a: argparse.Namespace) -> int:
     from .compare import add_opencv
 
     srcs = _sources(a)
-    result = evaluate(srcs, a.tracker or list(VARIANTS), a.pipeline, _progress(a))
+    reuse = EvalResult()
+    for path in a.reuse or []:
+        try:
+            reuse.merge(EvalResult.from_json(json.loads(Path(path).read_text())))
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise HarnessError(f"{path}: cannot reuse this result: {exc}") from None
+    variants = list(VARIANTS) if a.tracker is None else a.tracker
+    result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse)
+    for name, per in result.sequences.items():  # reused OpenCV rows
+        per.update({k: v for k, v in reuse.sequences.get(name, {}).items() if k.startswith("opencv_")})
     add_opencv(result, srcs, a.opencv, _progress(a))
     _finish(result, a)
     return 0
@@ -198,7 +207,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     def eval_args(p: argparse.ArgumentParser) -> None:
         p.add_argument("bags", nargs="+", help="bags, sequence folders, a folder of them, or synth:NAME")
-        p.add_argument("--tracker", nargs="+", choices=VARIANTS, default=None)
+        p.add_argument("--tracker", nargs="*", choices=VARIANTS, default=None,
+                       help="variants (default: all; `compare --tracker` alone: OpenCV only)")
         p.add_argument("--pipeline", choices=("kcf", "dcf_ca"), default="kcf")
         p.add_argument("--frames", type=int, default=None, help="only the first N frames of each source")
         p.add_argument("--image-topic", default=None)
@@ -214,6 +224,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="eval plus OpenCV KCF/CSRT/MOSSE (run in .venv-bench)")
     eval_args(p)
+    p.add_argument("--reuse", nargs="+", default=None,
+                   help="JSON results (--json ... --curves) whose rows need not be run again")
     p.add_argument("--opencv", nargs="+", default=["KCF", "CSRT", "MOSSE"], choices=("KCF", "CSRT", "MOSSE"))
     p.set_defaults(func=cmd_compare)
 

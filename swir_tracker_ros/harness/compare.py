@@ -69,6 +69,8 @@ def add_opencv(result: EvalResult, sources: Sequence[Source], trackers: Sequence
         for t in trackers:
             if t not in OPENCV_TRACKERS:
                 raise HarnessError(f"unknown OpenCV tracker {t!r}; choose from {', '.join(OPENCV_TRACKERS)}")
+            if f"opencv_{t.lower()}" in per:  # reused from an earlier run
+                continue
             name, s = run_opencv(src, t, py)
             per[name] = s
             if progress:

@@ -53,6 +53,22 @@ class EvalResult:
             out[v] = mean_scores(scores)
         return out
 
+    @classmethod
+    def from_json(cls, data: dict) -> EvalResult:
+        """Inverse of `to_json(curves=True)` (per-sequence rows; the mean is recomputed)."""
+        def unpack(d: dict) -> Score:
+            if "precision_curve" not in d:
+                raise HarnessError("a reused result needs its curves: write it with --json ... --curves")
+            vals = {k: (math.inf if v is None and k == "center_error" else v) for k, v in d.items()}
+            return Score(**vals)
+
+        return cls({n: {v: unpack(d) for v, d in per.items()} for n, per in data["sequences"].items()})
+
+    def merge(self, other: EvalResult) -> EvalResult:
+        for name, per in other.sequences.items():
+            self.sequences.setdefault(name, {}).update(per)
+        return self
+
     def to_json(self, curves: bool = False) -> dict:
         def pack(s: Score) -> dict:
             d = s.summary()
@@ -116,14 +132,17 @@ def run_source(source: Source, factory: Callable[[], object]) -> Run:
 
 
 def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str = "kcf",
-             progress: Callable[[str], None] | None = None) -> EvalResult:
-    """Score every variant on every source (sequence names must be unique)."""
+             progress: Callable[[str], None] | None = None, reuse: EvalResult | None = None) -> EvalResult:
+    """Score every variant on every source (sequence names must be unique); rows in `reuse` are kept."""
     result = EvalResult()
     for src in sources:
         if src.name in result.sequences:
             raise HarnessError(f"two sources are both called {src.name!r}")
         result.sequences[src.name] = {}
         for v in variants:
+            if reuse is not None and v in reuse.sequences.get(src.name, {}):
+                result.sequences[src.name][v] = reuse.sequences[src.name][v]
+                continue
             run = run_source(src, make_tracker_factory(v, pipeline))
             s = run.score()
             result.sequences[src.name][v] = s

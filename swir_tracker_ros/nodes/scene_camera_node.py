@@ -62,9 +62,9 @@ class SceneCameraParams:
                                                           "min": -360.0, "max": 360.0})
     initial_tilt_deg: float = field(default=0.0, metadata={
         "doc": "tilt used until the first joint state, deg", "min": -90.0, "max": 90.0})
-    extrapolate_s: float = field(default=0.2, metadata={
-        "doc": "extrapolate the last joint state with its velocity up to this age, s (0: hold)",
-        "min": 0.0, "max": 2.0})
+    extrapolate_s: float = field(default=0.3, metadata={
+        "doc": "extrapolate the last joint state (from its header stamp) with its velocity up to this "
+               "age, s (0: hold)", "min": 0.0, "max": 2.0})
 
     def validate(self) -> SceneCameraParams:
         if self.scene not in scene_names():
@@ -154,7 +154,9 @@ class SceneCameraNode(Node):
         except MessageError as exc:
             self.get_logger().warning(f"/positioner/joint_states: {exc}", throttle_duration_sec=5.0)
             return
-        self.pose = (s.pan, s.tilt, s.pan_velocity, s.tilt_velocity, time.time())
+        now = time.time()
+        measured = s.stamp if 0.0 < s.stamp <= now else now  # the bridge stamps the measurement time
+        self.pose = (s.pan, s.tilt, s.pan_velocity, s.tilt_velocity, measured)
 
     def _on_start(self, _req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
         started = self.clock.start(time.time())
@@ -164,7 +166,11 @@ class SceneCameraNode(Node):
         return resp
 
     def head_view(self, now: float) -> CameraView:
-        """The camera view at `now`: last joint state moved on by its velocity for at most extrapolate_s."""
+        """The view at `now`: the last joint state moved on by its velocity for at most extrapolate_s.
+
+        The real camera sees the head where it is now; joint states arrive late (query rate, line time),
+        so the measured pose is carried forward from its stamp with the measured velocity.
+        """
         pan, tilt, v_pan, v_tilt, at = self.pose
         age = min(max(now - at, 0.0), self.p.extrapolate_s) if math.isfinite(at) else 0.0
         return CameraView(pan + v_pan * age, tilt + v_tilt * age, self.p.hfov_deg, self.p.width,
