@@ -139,7 +139,8 @@ def occlusion_episodes(s: Series, visibility: np.ndarray | None = None) -> list[
             runs.append([int(i), int(i)])
     episodes = []
     for a, b in runs:
-        if s.t[b] - s.t[a] < MIN_EPISODE_S:
+        end = s.t[b + 1] if b + 1 < len(s.t) else s.t[b]  # hidden until the next frame shows it again
+        if end - s.t[a] < MIN_EPISODE_S:
             continue
         after = [k for k in range(b + 1, len(s.t)) if s.t[k] <= s.t[b] + RECOVERY_S]
         survived = any(s.state[k] == "tracking" and _on_target(s.gt[k], s.track[k]) for k in after)
