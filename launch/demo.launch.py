@@ -38,7 +38,8 @@ def _truthy(text: str) -> bool:
 
 def _graph(context, *_args, **_kwargs):
     arg = {name: LaunchConfiguration(name).perform(context) for name in (
-        "ego_motion_compensation", "sim_head", "sim_link", "port", "scene", "seed", "init_from_scene")}
+        "ego_motion_compensation", "sim_head", "sim_link", "port", "scene", "seed", "init_from_scene",
+        "max_accel")}
     port = arg["sim_link"] if _truthy(arg["sim_head"]) else arg["port"]
     tracker_overrides = {"ego_motion_compensation": _truthy(arg["ego_motion_compensation"])}
     if _truthy(arg["init_from_scene"]):
@@ -50,7 +51,7 @@ def _graph(context, *_args, **_kwargs):
         ExecuteProcess(cmd=[pelco_sim, "--link", arg["sim_link"]], name="pelco_sim", output="screen",
                        condition=IfCondition(arg["sim_head"])),
         Node(package=PACKAGE, executable="positioner_bridge", name="positioner_bridge", output="screen",
-             parameters=[_params("positioner.yaml"), {"port": port}]),
+             parameters=[_params("positioner.yaml"), {"port": port, "max_accel": float(arg["max_accel"])}]),
         Node(package=PACKAGE, executable="scene_camera", name="scene_camera", output="screen",
              parameters=[_params("scene_camera.yaml"), {"scene": arg["scene"], "seed": int(arg["seed"])}]),
         Node(package=PACKAGE, executable="tracker", name="tracker", output="screen",
@@ -68,6 +69,9 @@ def generate_launch_description() -> LaunchDescription:
                               description="symlink to the simulated head's pty"),
         DeclareLaunchArgument("port", default_value="/dev/ttyUSB0",
                               description="serial port or pyserial URL of a real head (sim_head:=false)"),
+        DeclareLaunchArgument("max_accel", default_value="0.05",
+                              description="head slew-rate limit, rad/s^2 (gentle starts keep ego-motion "
+                              "compensation ahead of the image motion; docs/demo.md)"),
         DeclareLaunchArgument("scene", default_value="demo", description="scene rendered by scene_camera"),
         DeclareLaunchArgument("seed", default_value="7", description="scene seed"),
         DeclareLaunchArgument("init_from_scene", default_value="true",

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from swir_tracker_ros.acquisition import crowd
-from swir_tracker_ros.acquisition.detectors import HogParams, HogPeopleDetector, MotDetFile, MotionDetector
+from swir_tracker_ros.acquisition.detectors import HogPeopleDetector, MotDetFile, MotionDetector
 from swir_tracker_ros.errors import AcquisitionError
 from swir_tracker_ros.types import Box
 
@@ -56,12 +56,16 @@ def test_known_image_shift_is_compensated() -> None:
 def test_hog_people_detector_on_tud_campus(shared_dir: Path) -> None:
     seq = shared_dir / "data" / "mot" / "tud_campus"
     rows = np.loadtxt(seq / "gt.txt", delimiter=",")
-    img = cv2.imread(str(seq / "000030.png"), cv2.IMREAD_GRAYSCALE)
-    gt = [Box(r[2] - 1, r[3] - 1, r[4], r[5]) for r in rows[rows[:, 0] == 30]]
-    dets = HogPeopleDetector(HogParams(upscale=1.5)).detect(img)
-    assert dets and all(0.0 < d.score < 1.0 for d in dets)
-    matched = sum(max(d.box.iou(g) for d in dets) > 0.4 for g in gt)
-    assert matched >= 2
+    hog = HogPeopleDetector()
+    matched = total = 0
+    for f in (10, 30, 50):
+        img = cv2.imread(str(seq / f"{f:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        gt = [Box(r[2] - 1, r[3] - 1, r[4], r[5]) for r in rows[rows[:, 0] == f]]
+        dets = hog.detect(img)
+        assert dets and all(0.0 < d.score < 1.0 for d in dets)
+        matched += sum(max(d.box.iou(g) for d in dets) > 0.5 for g in gt)
+        total += len(gt)
+    assert matched >= total // 3, (matched, total)
 
 
 def test_det_file_replays_mot_detections(shared_dir: Path, tmp_path: Path) -> None:

@@ -145,3 +145,12 @@ def test_filter_params_validate() -> None:
         KCFParams(padding=-1).validate()
     with pytest.raises(ParameterError, match="feature"):
         DCFCAParams(feature="sift").validate()
+
+
+def test_large_targets_are_tracked_at_half_resolution() -> None:
+    from swir_tracker_ros.core.detector import FilterBank
+    from swir_tracker_ros.core.params import TrackerParams
+
+    small, large = FilterBank(TrackerParams(), 40, 80), FilterBank(TrackerParams(), 100, 120)
+    assert small.model_scale == 1.0 and (small.tw, small.th) == (100, 200)
+    assert large.model_scale == 0.5 and (large.tw, large.th) == (124, 152)  # 2.5 x box / 2, whole cells

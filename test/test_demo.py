@@ -143,7 +143,7 @@ def test_launch_file_compiles_and_references_real_executables_and_params() -> No
 def test_shortened_demo_end_to_end(tmp_path) -> None:
     """A few seconds of the real graph: the head turns towards the pedestrian, who is in view at the end."""
     out = tmp_path / "demo"
-    proc = subprocess.run([executable("demo"), "--out", str(out), "--duration", "5", "--no-ego-compare"],
+    proc = subprocess.run([executable("demo"), "--out", str(out), "--duration", "4", "--no-ego-compare"],
                           capture_output=True, text=True, timeout=150)
     logs = "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-1500:]}"
                      for p in sorted(out.glob("*/logs/*.log")))

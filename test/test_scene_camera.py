@@ -52,13 +52,13 @@ def test_demo_scene_hides_the_target_while_it_stops(demo_scene) -> None:
         if truth.visible_fraction < 0.05 and target.path.velocity(t) == (0.0, 0.0):
             hidden_still.append(float(t))
     assert hidden_still, "the target never stands still while fully hidden"
-    assert 6.0 < hidden_still[0] < 9.0
+    assert 9.0 < hidden_still[0] < 11.0
 
 
 def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> None:
     from swir_tracker_ros.demo.world import target_visibility
 
-    vis = target_visibility(demo_scene, [0.5, 7.5, 12.0])
+    vis = target_visibility(demo_scene, [0.5, 9.5, 13.0])
     assert vis[0] > 0.9 and vis[1] < 0.05 and vis[2] > 0.9
 
 

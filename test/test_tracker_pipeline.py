@@ -218,3 +218,21 @@ def test_real_sequence_crossing_beats_the_bare_filter(sequences_dir: Path) -> No
     auc_full = success_auc([gts[0]] + [r.box for r in full], gts)
     auc_bare = success_auc([gts[0]] + [r.box for r in bare], gts)
     assert auc_full > 0.7 and auc_full > auc_bare
+
+
+def test_lost_after_long_occlusion_and_grid_scale_search(scene) -> None:
+    frames, gts, _ = scene
+    res = run("robust_adaptive", frames[:45], gts[0], max_occluded_frames=3, grid_scale_search=True)
+    states = [r.state for r in res]
+    first_lost = states.index(TrackState.LOST)
+    assert states[first_lost - 3 : first_lost] == [TrackState.OCCLUDED] * 3
+    assert all(s is TrackState.LOST for s in states[first_lost:])  # terminal until init
+    assert all(len(r.search_windows) == 9 for r in res[first_lost - 3 : first_lost])
+
+
+def test_target_leaving_the_image_is_lost() -> None:
+    frames, gts = zoom_scene(n=2, rate=1.0)
+    trk = Tracker(TrackerParams())
+    trk.init(frames[0], gts[0])
+    assert trk.update(frames[1], ego_shift=(-400.0, 0.0)).state is TrackState.LOST
+    assert trk.state is TrackState.LOST

@@ -215,16 +215,17 @@ def load_from_onnx(model_dir: Path) -> list[Embedding]:
 def verify(shared: Path, model_dir: Path, tol: float) -> float:
     """Max |torch - cv2.dnn| embedding difference on real held-out crops; raises SystemExit above tol."""
     val = validation_set(shared, SEED)
-    patches = np.stack([centre(c) for crops in val.values() for c in crops[:6]])
+    o = (RAW - INPUT_SIZE) // 2
+    raw = [c[o : o + INPUT_SIZE, o : o + INPUT_SIZE].astype(np.float32) for crops in val.values()
+           for c in crops[:6]]
     nets = load_from_onnx(model_dir)
     fam = SiameseFamily(model_dir)
     with torch.no_grad():
-        ref = [net(x).numpy() for net, x in zip(nets, inputs(patches))]
-    raw = [p * 1.0 for p in patches]  # already standardised; standardise() is idempotent on them
-    whole, parts = fam.embed_patches(raw)
+        ref = [net(x).numpy() for net, x in zip(nets, inputs(np.stack([standardise(p) for p in raw])))]
+    whole, parts = fam.embed_patches(raw)  # standardises inside, as at run time
     diff = max(float(np.abs(whole - ref[0]).max()),
                *(float(np.abs(parts[:, q] - ref[1 + q]).max()) for q in range(4)))
-    print(f"verify: {len(patches)} crops, max |torch - cv2.dnn| = {diff:.2e} (tolerance {tol:.0e})")
+    print(f"verify: {len(raw)} crops, max |torch - cv2.dnn| = {diff:.2e} (tolerance {tol:.0e})")
     if diff > tol:
         raise SystemExit(1)
     return diff

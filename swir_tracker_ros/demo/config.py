@@ -33,10 +33,20 @@ class DemoParams:
         "max": 600.0})
     pelco_sim_args: list[str] = field(default_factory=list, metadata={
         "doc": "extra pelco_sim command-line arguments (speed table, latency, faults)"})
+    positioner_overrides: dict[str, object] = field(default_factory=dict, metadata={
+        "doc": "positioner_bridge parameters set on top of params/positioner.yaml"})
+    tracker_overrides: dict[str, object] = field(default_factory=dict, metadata={
+        "doc": "tracker parameters set on top of params/tracker.yaml (core ones as tracker.<name>)"})
+    scene_camera_overrides: dict[str, object] = field(default_factory=dict, metadata={
+        "doc": "scene_camera parameters set on top of params/scene_camera.yaml"})
 
     def validate(self) -> DemoParams:
         if self.scene not in scene_names():
             raise DemoError(f"demo parameter scene = {self.scene!r} is not one of {scene_names()}")
+        for name in ("positioner_overrides", "tracker_overrides", "scene_camera_overrides"):
+            value = getattr(self, name)
+            if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+                raise DemoError(f"demo parameter {name} must map parameter names to values, got {value!r}")
         for f in dataclasses.fields(self):
             value, meta = getattr(self, f.name), f.metadata
             if "min" in meta and not meta["min"] <= value <= meta["max"]:

@@ -143,6 +143,14 @@ def text_table(summaries: list[RunSummary]) -> str:
     return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows)
 
 
+def _machine_line(machine: dict) -> str:
+    if not machine:
+        return ""
+    return (f"Machine: {machine.get('cpus')} CPUs, load average {machine.get('load_average_start')} at the "
+            f"start and {machine.get('load_average_end')} at the end (other work competes with the real-time "
+            "loop when this exceeds the CPU count).")
+
+
 def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[str, Path]:
     """summary.json, report.md and report.html in `out`; extras: paths (relative) and process exits."""
     data = {"runs": [s.as_dict() for s in summaries], **extras}
@@ -152,6 +160,7 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
           "A simulated SWIR camera (`scene_camera`) on a simulated Pelco-D head (`pelco_sim`, driven by "
           "`positioner_bridge`) follows a pedestrian with the `tracker`; every part ran as its own ROS 2 "
           "process. Centring error is the true angle of the target from the optical axis.", "",
+          _machine_line(extras.get("machine", {})), "",
           "| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     md += ["| " + " | ".join(r) + " |" for r in rows[1:]]
     md += ["", "## Files", ""]
@@ -186,7 +195,7 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
         "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}td,th{padding:2px 10px;"
         "border-bottom:1px solid #ddd;text-align:left}</style></head><body>"
         "<h1>Closed-loop pan-tilt demo</h1>"
-        f"<p>{html.escape(md[2])}</p><table>{table}</table>"
+        f"<p>{html.escape(md[2])}</p><p>{html.escape(md[4])}</p><table>{table}</table>"
         "<h2>Plots</h2><img src='plots/centring_error.png'><img src='plots/head_angles.png'>"
         f"<h2>Debug video</h2>{videos}{gifs}"
         "<p>MP4 uses the MPEG-4 Part 2 codec: if the browser does not play it, open the file with a video "

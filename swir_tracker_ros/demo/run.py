@@ -52,7 +52,12 @@ def _ros_args(params_file: Path | None, overrides: dict[str, object]) -> list[st
     if params_file is not None and params_file.is_file():
         args += ["--params-file", str(params_file)]
     for key, value in overrides.items():
-        text = ("true" if value else "false") if isinstance(value, bool) else str(value)
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        elif isinstance(value, (list, tuple)):
+            text = "[" + ", ".join(str(v) for v in value) + "]"
+        else:
+            text = str(value)
         args += ["-p", f"{key}:={text}"]
     return args
 
@@ -75,12 +80,13 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
                                         *p.pelco_sim_args], capture_first_line=True)
         port = pty_url(group.first_line(sim, timeout=20.0))
         group.start("positioner_bridge", [find_executable("positioner_bridge"),
-                                          *_ros_args(pdir / "positioner.yaml", {"port": port})])
+                                          *_ros_args(pdir / "positioner.yaml",
+                                                     {**p.positioner_overrides, "port": port})])
         group.start("scene_camera", [find_executable("scene_camera"), *_ros_args(
-            pdir / "scene_camera.yaml", {"autostart": False, "scene": p.scene, "seed": p.seed,
-                                         "duration_s": p.duration_s + 5.0})])
+            pdir / "scene_camera.yaml", {**p.scene_camera_overrides, "autostart": False, "scene": p.scene,
+                                         "seed": p.seed, "duration_s": p.duration_s + 5.0})])
         group.start("tracker", [find_executable("tracker"), *_ros_args(
-            pdir / "tracker.yaml", {"ego_motion_compensation": ego})])
+            pdir / "tracker.yaml", {**p.tracker_overrides, "ego_motion_compensation": ego})])
         supervisor = group.start("demo_supervisor", [
             sys.executable, "-m", "swir_tracker_ros.nodes.demo_supervisor_node", "--out", str(folder),
             "--duration", str(p.duration_s), "--label", p.scene, "--ego", str(int(ego)),
@@ -136,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         out = args.out.resolve()
         out.mkdir(parents=True, exist_ok=True)
         started = time.monotonic()
+        load_before = os.getloadavg()[0]
         results = [run_once(p, out, ego, i) for i, ego in enumerate([True] if args.no_ego_compare else
                                                                     [True, False])]
     except DemoError as exc:
@@ -159,9 +166,12 @@ def main(argv: list[str] | None = None) -> int:
     files["plot: head angles"] = "plots/head_angles.png"
     paths = write_reports(out, [r.summary for r in results], {
         "files": files, "processes": {RUN_DIRS[r.records.ego_motion_compensation]: r.exits for r in results},
-        "wall_time_s": time.monotonic() - started, "scene": p.scene, "seed": p.seed})
+        "wall_time_s": time.monotonic() - started, "scene": p.scene, "seed": p.seed,
+        "machine": {"cpus": os.cpu_count(), "load_average_start": round(load_before, 2),
+                    "load_average_end": round(os.getloadavg()[0], 2)}})
     print(text_table([r.summary for r in results]))
-    print(f"\n[demo] finished in {time.monotonic() - started:.0f} s.")
+    print(f"\n[demo] finished in {time.monotonic() - started:.0f} s; load average {load_before:.1f} at the "
+          f"start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} CPUs.")
     print(f"[demo] report: {paths['html']}  (open it in a browser, e.g. `xdg-open {paths['html']}`)")
     print(f"[demo] also: {paths['md']}, {paths['json']}, plots in {out / 'plots'}")
     ok = all(r.records.outcome == "completed" for r in results)
