@@ -246,9 +246,8 @@ class Tracker:
             return det.psr < p.psr_threshold
         mean = self._apce_sum / self._apce_n if self._apce_n else 0.0
         occluded = self._apce_n > 0 and det.apce <= p.apce_occlusion_ratio * mean
-        if not occluded:
-            self._apce_sum += det.apce
-            self._apce_n += 1
+        self._apce_sum += det.apce  # mean over every frame so far (the thesis does not say which frames)
+        self._apce_n += 1
         return occluded
 
     def _threshold(self, peak: float) -> float | None:

@@ -51,8 +51,8 @@ class CostWeights:
     w1: float = 100.0  # whole-box Siamese distance alpha
     w2: float = 25.0  # sum of the four quadrant Siamese distances beta
     w3: float = 300.0  # edge-LBP RMS distance tau
-    w_dst: float = 20.0  # motion: distance to the prediction (per box height)
-    w_dev: float = 10.0  # motion: deviation from the motion pattern (per box height)
+    w_dst: float = 200.0  # motion: distance to the prediction (per box height)
+    w_dev: float = 100.0  # motion: deviation from the motion pattern (per box height)
     use_edge: bool = True
     use_siamese: bool = True
     gate_chi2: float = 9.21  # chi^2_2(0.99)

@@ -125,7 +125,8 @@ def occlusion_episodes(s: Series, visibility: np.ndarray | None = None) -> list[
     `visibility`: the target's visible fraction per frame independent of the head (`world.target_visibility`),
     so every run of a scene has the same episodes; without it, the rendered frames' visibility while the
     target's centre is in view. Survived: within RECOVERY_S after the target is visible again, the tracker
-    reports `tracking` on a box whose centre is on the target (see `ON_TARGET_PX`).
+    reports `tracking` on a box whose centre is on the target (see `ON_TARGET_PX`). An occlusion still going
+    on when the run ends is left out.
     """
     if visibility is not None:
         hidden = np.asarray(visibility) < OCCLUDED_BELOW
@@ -142,10 +143,10 @@ def occlusion_episodes(s: Series, visibility: np.ndarray | None = None) -> list[
         end = s.t[b + 1] if b + 1 < len(s.t) else s.t[b]  # hidden until the next frame shows it again
         if end - s.t[a] < MIN_EPISODE_S:
             continue
+        if b + 1 >= len(s.t):
+            continue  # still hidden when the run ended: not an episode the track could survive yet
         after = [k for k in range(b + 1, len(s.t)) if s.t[k] <= s.t[b] + RECOVERY_S]
         survived = any(s.state[k] == "tracking" and _on_target(s.gt[k], s.track[k]) for k in after)
-        if not after:  # hidden until the end of the run: judge on the last frames instead
-            survived = s.state[b] in ("tracking", "occluded")
         in_view = bool(s.centre_in_view[a:b + 2].any())
         note = "survived" if survived else ("not re-acquired" if in_view else "target out of view")
         vis = s.visible if visibility is None else np.asarray(visibility)
@@ -179,7 +180,7 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
     span = max(t1 - t0, 1e-9)
     frames_in = [r for r in rec.frames if t0 <= r[0] <= t1]
     outputs = [r for r in rec.error if t0 <= r[0] <= t1]
-    latency = np.array([(r[1] - r[0]) * 1e3 for r in outputs])
+    latency = tracker_latency_ms(rec, t0, t1)
     joints = np.array([[r[0], r[2], r[3]] for r in rec.joints]) if rec.joints else np.zeros((0, 3))
     travel = [0.0, 0.0]
     if len(joints) and n:
@@ -205,6 +206,26 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
         initial_offset_deg=[math.degrees(s.pan_error[0]), math.degrees(s.tilt_error[0])] if n else [],
         head_travel_deg=travel, episodes=[asdict(e) for e in episodes],
     )
+
+
+def tracker_latency_ms(rec: RunRecords, t0: float, t1: float) -> np.ndarray:
+    """Frame stamp -> tracker output latencies (ms) of the run [t0, t1].
+
+    The tracker's own /diagnostics (`stamp_age_ms_p50` of each report window: header stamp to publish on
+    the node clock) when it reports them; otherwise stamp to arrival at the recorder, which also counts
+    the recorder's own queue (it records every camera image, so it lags when the machine is busy).
+    """
+    ages = []
+    for d in rec.diagnostics:
+        if d.get("name") == "swir_tracker/tracker_node" and t0 <= d.get("recv", 0.0) <= t1 + 1.5:
+            try:
+                ages.append(float(d["values"]["stamp_age_ms_p50"]))
+            except (KeyError, TypeError, ValueError):
+                continue
+    ages = [a for a in ages if math.isfinite(a)]
+    if ages:
+        return np.array(ages)
+    return np.array([(r[1] - r[0]) * 1e3 for r in rec.error if t0 <= r[0] <= t1])
 
 
 def read_trace(path: Path) -> np.ndarray:

@@ -114,8 +114,8 @@ ROWS = (
     ("occlusions survived", "occlusions_survived", "{}"),
     ("camera frames/s", "camera_fps", "{:.1f}"),
     ("tracker outputs/s", "tracker_fps", "{:.1f}"),
-    ("latency frame -> /track/pan_tilt_error, p50", "latency_p50_ms", "{:.1f} ms"),
-    ("latency frame -> /track/pan_tilt_error, p95", "latency_p95_ms", "{:.1f} ms"),
+    ("latency frame stamp -> tracker output, p50", "latency_p50_ms", "{:.1f} ms"),
+    ("latency frame stamp -> tracker output, p95", "latency_p95_ms", "{:.1f} ms"),
     ("frames with state lost", "lost_frames", "{}"),
     ("final tracker state", "final_state", "{}"),
 )

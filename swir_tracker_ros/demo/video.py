@@ -39,7 +39,12 @@ class VideoSink:
         self._gif: list[np.ndarray] = []
         self._size: tuple[int, int] | None = None
 
-    def write(self, frame: np.ndarray) -> None:
+    def write(self, frame: np.ndarray, repeat: int = 1) -> None:
+        """Append a frame `repeat` times (repeat > 1 keeps playback in real time when frames were skipped)."""
+        for _ in range(max(1, repeat)):
+            self._write(frame)
+
+    def _write(self, frame: np.ndarray) -> None:
         if frame.ndim == 2:
             frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
         size = (frame.shape[1], frame.shape[0])

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The demo's built-in scene (a pedestrian who stops behind a wall, a car, a pole) and the scene clock."""
+"""The demo's built-in scene (a pedestrian who stops behind a wall, a crossing car) and the scene clock."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ TARGET_LEGS: tuple[Leg, ...] = (
     Leg(2.7, vx=-1.2),  # ... walks on a little faster and reappears at ~10.6 s
     Leg(1.0, vy=-1.0),  # turns towards the camera
     Leg(7.0, vx=1.0),  # turns back, passes behind the wall again (~16.6-18 s); the car crosses at ~20 s
-    Leg(9.0, vx=0.9, vy=0.4),  # walks away to the left and passes behind the pole (~28.6 s)
+    Leg(9.0, vx=0.9, vy=0.4),  # walks away to the left, in the open
 )
 TARGET_START = (3.0, 70.0)
 DEMO_DURATION_S = 30.0  # the scene's natural length (the target keeps walking after it)
@@ -36,14 +36,14 @@ def demo_world(seed: int = 7, bits: int = 16, fps: float = 25.0) -> World:
     """The deterministic demo world (same seed, same scene) rendered by the `scene_camera` node.
 
     Occluders on the target's path: a wall (occlusion ~9.1-10.9 s, during which the target stops for
-    0.4 s, and again ~16.6-18.0 s after it turned back), a car crossing in front of its legs
-    (~19.5-20.1 s, a moving occluder) and a pole (partial, ~28.5-29.0 s). A second pedestrian further
-    away (clutter) and a tree complete the scene.
+    0.4 s, and again ~16.6-18.0 s after it turned back) and a car crossing in front of its legs
+    (~19.5-20.1 s, a moving occluder). A second pedestrian further away (clutter), a pole and a tree
+    complete the scene.
     """
     panorama = make_panorama(seed, az_span_deg=60.0, el_min_deg=-9.0, el_max_deg=5.0)
     target = Pedestrian(TARGET_ID, Path(TARGET_START, TARGET_LEGS), seed=seed,
                         look=Look(head=0.62, upper=0.2, lower=0.14, texture=0.05))
-    distractor = Pedestrian(DISTRACTOR_ID, Path((-18.0, 95.0), (Leg(30.0, vx=1.1),)), seed=seed,
+    distractor = Pedestrian(DISTRACTOR_ID, Path((-30.0, 100.0), (Leg(40.0, vx=0.8),)), seed=seed,
                             look=Look(head=0.6, upper=0.26, lower=0.18, texture=0.05))
     car = Vehicle(VEHICLE_ID, Path((-82.0, 45.0), (Leg(40.0, vx=4.0),)), seed=seed)
     objects = [
@@ -51,8 +51,8 @@ def demo_world(seed: int = 7, bits: int = 16, fps: float = 25.0) -> World:
         distractor,
         car,
         wall(-5.7, 58.0, width_m=1.2, height_m=2.6, seed=seed),
-        pole(3.2, 60.0, height_m=6.0, width_m=0.35, seed=seed),
-        tree(9.0, 62.0, width_m=2.6, height_m=5.5, seed=seed),  # scenery off the path
+        pole(-16.0, 60.0, height_m=6.0, width_m=0.35, seed=seed),  # scenery off the target's path
+        tree(9.0, 62.0, width_m=2.6, height_m=5.5, seed=seed),
     ]
     sensor = SensorModel(bits=bits, noise=0.006, fpn=0.003, vignetting=0.12, fps=fps)
     return World(panorama=panorama, objects=objects, sensor=sensor, seed=seed)

@@ -28,7 +28,10 @@ from swir_tracker_ros.demo.recording import RECORDED_TOPICS, BagRecorder, RunRec
 from swir_tracker_ros.demo.video import VideoSink, caption
 from swir_tracker_ros.nodes.scene_camera_node import GROUND_TRUTH_STATE, ground_truth_state_values
 
-RECORD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)  # matches any publisher
+# Every publisher in the demo graph is reliable (scene_camera's images too), so nothing is lost to the
+# fragmentation of large images over best-effort transport.
+RECORD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+IMAGE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 TYPES = {
     "sensor_msgs/msg/Image": Image, "sensor_msgs/msg/CameraInfo": CameraInfo,
     "geometry_msgs/msg/PolygonStamped": PolygonStamped, "geometry_msgs/msg/Vector3Stamped": Vector3Stamped,
@@ -76,13 +79,15 @@ class DemoSupervisor(Node):
         self.start_future = None
         self.scene_t = 0.0
         self.scene_times: dict[float, float] = {}  # frame stamp -> scene time, recent frames
+        self.last_debug_stamp: float | None = None
         self._skip_images = not args.bag_images
         for topic, type_name in RECORDED_TOPICS.items():
             if topic == "/track/init":
                 continue  # recorded as published by this node
-            self.create_subscription(TYPES[type_name], topic, self._make_cb(topic), RECORD_QOS, raw=True)
+            qos = IMAGE_QOS if type_name == "sensor_msgs/msg/Image" else RECORD_QOS
+            self.create_subscription(TYPES[type_name], topic, self._make_cb(topic), qos, raw=True)
         if self.video is not None:
-            self.create_subscription(Image, "/track/debug_image", self._on_debug, RECORD_QOS, raw=True)
+            self.create_subscription(Image, "/track/debug_image", self._on_debug, IMAGE_QOS, raw=True)
         self.init_pub = self.create_publisher(RegionOfInterest, "/track/init", 1)
         self.start_client = self.create_client(Trigger, "/scene/start")
         self.timer = self.create_timer(0.05, self._tick)
@@ -162,7 +167,12 @@ class DemoSupervisor(Node):
         t = self.scene_times.get(round(stamp_to_seconds(msg.header.stamp), 4), self.scene_t)
         mode = "ego-motion compensation ON" if self.args.ego else "ego-motion compensation OFF"
         frame = caption(frame, f"scene t = {t:5.2f} s   {mode}")
-        self.video.write(frame)
+        stamp = stamp_to_seconds(msg.header.stamp)
+        # Repeat frames over the gap since the last one: the video plays in real time at any tracker rate.
+        gap = 0.0 if self.last_debug_stamp is None else stamp - self.last_debug_stamp
+        repeat = round(gap * self.args.fps)
+        self.last_debug_stamp = stamp
+        self.video.write(frame, repeat=min(max(repeat, 1), int(self.args.fps)))
         self.rec.debug_frames += 1
         if self.snapshot_times and self.phase == "run" and t >= self.snapshot_times[0]:
             import cv2

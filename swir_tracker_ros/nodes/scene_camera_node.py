@@ -13,7 +13,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PolygonStamped
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, qos_profile_sensor_data
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image, JointState
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
@@ -29,6 +29,7 @@ from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.scene.camera import CameraView
 from swir_tracker_ros.scene.world import Truth
 
+CAMERA_QOS = QoSProfile(depth=2, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 GROUND_TRUTH_STATE = "/ground_truth/state"
 GROUND_TRUTH_STATUS = "swir_tracker/ground_truth"
 GT_KEYS = ("scene_time", "in_view", "visible", "occlusion", "occluded", "pan_error", "tilt_error",
@@ -136,8 +137,10 @@ class SceneCameraNode(Node):
         self.clock = SceneClock(duration, started_at=None)
         self.pose = (math.radians(p.initial_pan_deg), math.radians(p.initial_tilt_deg), 0.0, 0.0, -math.inf)
         self.frames = 0
-        self.image_pub = self.create_publisher(Image, "/camera/image_raw", qos_profile_sensor_data)
-        self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", qos_profile_sensor_data)
+        # Reliable, shallow: sensor-data (best-effort) subscribers such as the tracker match it and get the
+        # newest frame; a reliable recorder gets every frame, lost fragments of the large image re-sent.
+        self.image_pub = self.create_publisher(Image, "/camera/image_raw", CAMERA_QOS)
+        self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", CAMERA_QOS)
         self.gt_pub = self.create_publisher(PolygonStamped, "/ground_truth/box", QoSProfile(depth=10))
         self.gt_state_pub = self.create_publisher(DiagnosticArray, GROUND_TRUTH_STATE, QoSProfile(depth=10))
         self.create_subscription(JointState, "/positioner/joint_states", self._on_joints, 10)
