@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
-from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction
+from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction, SetEnvironmentVariable
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
@@ -47,7 +47,11 @@ def _graph(context, *_args, **_kwargs):
 
         tracker_overrides["init_box"] = initial_target_box(arg["scene"], int(arg["seed"]))
     pelco_sim = os.path.join(get_package_prefix(PACKAGE), "lib", PACKAGE, "pelco_sim")  # not a ROS node
+    profile = os.path.join(get_package_share_directory(PACKAGE), "config", "fastdds_shm_large.xml")
+    env = ([SetEnvironmentVariable("FASTRTPS_DEFAULT_PROFILES_FILE", profile)]
+           if os.path.isfile(profile) and "FASTRTPS_DEFAULT_PROFILES_FILE" not in os.environ else [])
     return [
+        *env,  # full frames through a large shared-memory segment (docs/interfaces.md)
         ExecuteProcess(cmd=[pelco_sim, "--link", arg["sim_link"]], name="pelco_sim", output="screen",
                        condition=IfCondition(arg["sim_head"])),
         Node(package=PACKAGE, executable="positioner_bridge", name="positioner_bridge", output="screen",

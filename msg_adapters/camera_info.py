@@ -75,4 +75,7 @@ def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
     out_h = (roi_h if roi_h > 0 else height) // by
     if out_w <= 0 or out_h <= 0:
         raise MessageError(f"CameraInfo roi/binning leave an empty image: {out_w}x{out_h}")
-    return Intrinsics(fx / bx, fy / by, cx / bx, cy / by, out_w, out_h)
+    fx_out, fy_out = fx / bx, fy / by
+    if not (fx_out > 0 and fy_out > 0):  # a denormal focal length underflows to zero once binned
+        raise MessageError(f"CameraInfo.k focal lengths vanish after binning {bx}x{by}: fx={fx}, fy={fy}")
+    return Intrinsics(fx_out, fy_out, cx / bx, cy / by, out_w, out_h)

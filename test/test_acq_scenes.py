@@ -27,7 +27,8 @@ def _identity_map(scene: crowd.CrowdScene, frames: int, tracker: MultiTargetTrac
         dets = detector.detect(img) if detector is not None else crowd.simulated_detections(gts, rng)
         tracks = tracker.step(img, dets)
         gts = [g for g in gts if g.visibility >= 0.25]
-        dist = np.array([[1.0 - g.box.iou(t.box) for t in tracks] for g in gts]).reshape(len(gts), len(tracks))
+        dist = np.array([[1.0 - g.box.iou(t.box) for t in tracks] for g in gts])
+        dist = dist.reshape(len(gts), len(tracks))
         dist[dist > 0.5] = np.nan
         acc.update([g.id for g in gts], [t.id for t in tracks], dist)
     ev = acc.mot_events

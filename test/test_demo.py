@@ -162,6 +162,11 @@ def test_shortened_demo_end_to_end(tmp_path) -> None:
     for name, end in exits.items():
         assert end["returncode"] == 0 and end["how"] in ("sigint", "exited"), (name, end)
     assert (out / "ego_on" / "bag" / "metadata.yaml").is_file()
+    from swir_tracker_ros.harness.bagio import read_frames  # the harness replays the demo's recording
+
+    frames = list(read_frames(out / "ego_on" / "bag"))
+    assert len(frames) >= run["frames"] and frames[0].image.shape == (504, 576)
+    assert sum(f.gt is not None for f in frames) >= run["frames"] // 2
     assert (out / "ego_on" / "debug.mp4").stat().st_size > 10_000
     assert (out / "report.html").is_file() and (out / "plots" / "head_angles.png").is_file()
     assert "report:" in proc.stdout
@@ -171,3 +176,36 @@ def test_demo_module_runs_as_script_help() -> None:
     proc = subprocess.run([sys.executable, "-m", "swir_tracker_ros.demo.run", "--help"], capture_output=True,
                           text=True, timeout=60)
     assert proc.returncode == 0 and "--no-ego-compare" in proc.stdout
+
+
+def test_video_sink_writes_mp4_or_falls_back_to_gif(tmp_path, monkeypatch) -> None:
+    import numpy as np
+    from PIL import Image
+
+    from swir_tracker_ros.demo import video
+
+    frame = np.zeros((504, 576, 3), np.uint8)
+    sink = video.VideoSink(tmp_path / "a", fps=25.0)
+    for k in range(10):
+        sink.write(video.caption(frame + k, f"frame {k}"), repeat=2)
+    path = sink.close()
+    assert path is not None and path.suffix == ".mp4" and path.stat().st_size > 1000
+
+    class NoEncoder:
+        def __init__(self, *args) -> None:
+            pass
+
+        def isOpened(self) -> bool:
+            return False
+
+        def release(self) -> None:
+            pass
+
+    monkeypatch.setattr(video.cv2, "VideoWriter", NoEncoder)
+    sink = video.VideoSink(tmp_path / "b", fps=25.0, gif_stride=2)
+    for k in range(10):
+        sink.write(frame + 20 * k)
+    path = sink.close()
+    assert path is not None and path.suffix == ".gif"
+    with Image.open(path) as gif:
+        assert gif.n_frames == 5 and gif.size == (288, 252)

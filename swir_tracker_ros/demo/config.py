@@ -77,6 +77,15 @@ def params_dir() -> Path:
                         ) from exc
 
 
+def dds_profile() -> Path | None:
+    """The package's large-frame Fast DDS profile (config/fastdds_shm_large.xml, docs/interfaces.md)."""
+    for base in (Path(__file__).resolve().parents[2], Path(sys.prefix) / "share" / PACKAGE):
+        path = base / "config" / "fastdds_shm_large.xml"
+        if path.is_file():
+            return path
+    return None
+
+
 def load_demo_params(path: Path | None = None) -> DemoParams:
     """DemoParams from the `demo:` mapping of a YAML file (default params/demo.yaml); unknown keys refused."""
     path = path or params_dir() / "demo.yaml"

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from swir_tracker_ros.demo.analysis import RunSummary, summarise
-from swir_tracker_ros.demo.config import DemoParams, load_demo_params, params_dir
+from swir_tracker_ros.demo.config import DemoParams, dds_profile, load_demo_params, params_dir
 from swir_tracker_ros.demo.processes import DemoError, ProcessGroup, find_executable, ros_environment, tail
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
@@ -70,6 +70,9 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
     folder.mkdir(parents=True)
     pdir = params_dir()
     env = ros_environment(domain_for(run_index))
+    profile = dds_profile()
+    if profile is not None:  # full frames through a large shared-memory segment, not UDP fragments
+        env.setdefault("FASTRTPS_DEFAULT_PROFILES_FILE", str(profile))
     group = ProcessGroup(folder / "logs", env)
     tag = f"ego-motion compensation {'ON' if ego else 'OFF'}"
     log(f"[demo] run {run_index + 1}: {tag}, ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}, folder {folder}")
