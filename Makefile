@@ -10,7 +10,7 @@ PIP_FLAGS ?= --disable-pip-version-check -q
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PYTHONDONTWRITEBYTECODE = 1
 
-.PHONY: venv test lint demo bench bench-venv regress clean
+.PHONY: venv test lint demo bench bench-venv regress train clean
 
 venv: $(STAMP)
 
@@ -27,6 +27,13 @@ $(BSTAMP): requirements-bench.txt
 	test -x $(BENCH)/bin/python || $(PY) -m venv $(BENCH)
 	$(BENCH)/bin/python -m pip install $(PIP_FLAGS) -r requirements-bench.txt
 	touch $@
+
+# Training-only venv (PyTorch CPU) for the Siamese appearance nets; the runtime never needs it.
+train: $(STAMP)
+	test -x .venv-train/bin/python || $(PY) -m venv .venv-train
+	.venv-train/bin/python -m pip install $(PIP_FLAGS) -r requirements-train.txt
+	.venv-train/bin/python -m pip install $(PIP_FLAGS) --no-deps -e .
+	.venv-train/bin/python training/train_siamese.py
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
@@ -46,4 +53,4 @@ bench: $(STAMP) $(BSTAMP)
 	$(VPY) benchmarks/node_latency.py
 
 clean:
-	rm -rf $(VENV) $(BENCH) build install log out *.egg-info
+	rm -rf $(VENV) $(BENCH) .venv-train build install log out *.egg-info

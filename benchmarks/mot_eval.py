@@ -207,6 +207,10 @@ def main(argv: list[str] | None = None) -> int:
                       SimulatedDetector(crowd.crossing_scene(s), s), siamese) for s in seeds]
     print(table(f"Synthetic thermal crossings ({len(cross)} scenes x 80 frames), simulated detector",
                 pooled(cross)))
+    meets = [ablation(lambda s=s: crowd_frames(crowd.meeting_scene(s), 80),
+                      SimulatedDetector(crowd.meeting_scene(s), s), siamese) for s in seeds]
+    print(table(f"Synthetic thermal meetings: two pedestrians meet and turn back ({len(meets)} scenes x 80 "
+                "frames), simulated detector", pooled(meets)))
     crowds = [ablation(lambda s=s: crowd_frames(crowd.random_crowd(s, 8), 120),
                        SimulatedDetector(crowd.random_crowd(s, 8), s), siamese) for s in seeds]
     print(table(f"Synthetic thermal crowds ({len(crowds)} scenes x 120 frames, 8 pedestrians), simulated "

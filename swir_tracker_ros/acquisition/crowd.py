@@ -35,11 +35,13 @@ class Walker:
     height: float  # px at frame 0
     growth: float = 0.0  # height change per frame (approach / recede)
     depth: float = 0.0  # draw order: larger is nearer (drawn later)
+    turn_at: int | None = None  # frame after which the walker turns back (velocity reversed)
 
     def box(self, k: int) -> Box:
         h = max(8.0, self.height + self.growth * k)
-        fx = self.start[0] + self.velocity[0] * k
-        fy = self.start[1] + self.velocity[1] * k
+        t = k if self.turn_at is None or k <= self.turn_at else 2 * self.turn_at - k
+        fx = self.start[0] + self.velocity[0] * t
+        fy = self.start[1] + self.velocity[1] * t
         w = h * self.identity.aspect
         return Box(fx - w / 2.0, fy - h, w, h)
 
@@ -183,6 +185,20 @@ def crossing_scene(seed: int = 0, frames: int = 80) -> CrowdScene:
     v = 500.0 / frames
     return CrowdScene(walkers=[Walker(a, (70.0, y), (v, 0.0), 120.0, depth=1.0),
                                Walker(b, (570.0, y + 6.0), (-v, 0.0), 116.0, depth=0.0)], seed=seed)
+
+
+def meeting_scene(seed: int = 0, frames: int = 80) -> CrowdScene:
+    """Two pedestrians walk towards each other, overlap and both turn back where they meet: the motion
+    model predicts that they pass, so only appearance can keep the identities."""
+    rng = np.random.default_rng(seed)
+    a, b = make_identity(1, rng), make_identity(2, rng)
+    y = 360.0 + rng.uniform(-20, 20)
+    v = 4.0
+    meet = frames // 2
+    x_meet = 320.0
+    left = Walker(a, (x_meet - 8.0 - v * meet, y), (v, 0.0), 120.0, depth=1.0, turn_at=meet)
+    right = Walker(b, (x_meet + 8.0 + v * meet, y + 6.0), (-v, 0.0), 116.0, depth=0.0, turn_at=meet)
+    return CrowdScene(walkers=[left, right], seed=seed)
 
 
 def occlusion_scene(seed: int = 0, occluded_frames: int = 10) -> CrowdScene:

@@ -52,25 +52,64 @@ def gradients(patches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mag.reshape(n, h, w), ang.reshape(n, h, w)
 
 
-def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
-    """Gradient histograms, shape (N, hc, wc, 18): hard orientation bins, bilinear spatial interpolation.
+def _orientation_bins(ang: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Soft orientation binning (Piotr's fhog, softBin = -1): the two nearest of the 18 contrast-sensitive
+    bins (centres at multiples of 20 degrees) and the weight od of the upper one (1 - od for the lower)."""
+    nb = 2 * N_ORIENT
+    o = ang * np.float32(nb / (2.0 * np.pi))
+    ob0 = o.astype(np.intp)  # floor, o >= 0
+    od = o - ob0.astype(np.float32)
+    ob0[ob0 >= nb] -= nb
+    ob1 = ob0 + 1
+    ob1[ob1 >= nb] = 0
+    return ob0, ob1, od
 
-    The separable interpolation runs as one bincount along x (two entries per pixel) followed by a
-    small matrix product along y.
+
+@lru_cache(maxsize=8)
+def _triangle_kernel(cell: int) -> np.ndarray:
+    """1 x 2cell kernel of the bilinear pixel -> cell weights: pixel 2cell-1-j ... weight 1 - |d| / cell."""
+    x = np.arange(2 * cell, dtype=np.float64) - (cell - 0.5)
+    return (1.0 - np.abs(x) / cell).astype(np.float32)[None, :]
+
+
+def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
+    """Gradient histograms, shape (N, hc, wc, 18): soft orientation bins, bilinear spatial interpolation.
+
+    Patches whose sides are whole cells (every template) take the fast path: each pixel's magnitude is
+    written into its two orientation bins of a dense (cells, 18, cell) buffer (two scatters, no
+    accumulation), the x interpolation is one small matrix product over the `cell` pixel offsets and
+    the y interpolation `cell` vectorised row passes. Other sizes use one bincount (4 entries a pixel).
     """
     n, h, w = patches.shape
     mag, ang = gradients(patches)
     nb = 2 * N_ORIENT
-    obin = np.rint(ang * (nb / (2.0 * np.pi))).astype(np.intp)
-    obin[obin >= nb] -= nb
-    x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
+    ob0, ob1, od = _orientation_bins(ang)
+    m1 = mag * od
+    m0 = mag - m1
     hc, wc = h // cell, w // cell
-    rows = (np.arange(n * h, dtype=np.intp) * (wc * nb)).reshape(n, h, 1)
-    i0 = rows + x0[None, None, :] * nb + obin
-    i1 = rows + x1[None, None, :] * nb + obin
-    index = np.concatenate([i0.ravel(), i1.ravel()])
-    weight = np.concatenate([(mag * wx0).ravel(), (mag * wx1).ravel()])
-    hx = np.bincount(index, weights=weight, minlength=n * h * wc * nb).astype(np.float32)
+    if w % cell == 0:
+        # one image of 18 orientation planes, each pixel's magnitude written into its two bins
+        npx = n * h * w
+        pix = np.arange(npx, dtype=np.intp).reshape(n, h, w)
+        planes = np.zeros(nb * npx, dtype=np.float32)
+        planes[ob0 * npx + pix] = m0
+        planes[ob1 * npx + pix] = m1  # ob1 != ob0, so plain assignment is exact
+        # x interpolation: the 2cell-tap triangle at every pixel (zero outside), sampled at each cell start
+        filt = cv2.filter2D(
+            planes.reshape(nb * n * h, w), -1, _triangle_kernel(cell), anchor=(cell // 2, 0),
+            borderType=cv2.BORDER_CONSTANT,
+        )
+        hx = np.ascontiguousarray(filt[:, :: cell].reshape(nb, n * h, wc).transpose(1, 2, 0))
+    else:
+        x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
+        rows = (np.arange(n * h, dtype=np.intp) * (wc * nb)).reshape(n, h, 1)
+        c0 = rows + x0[None, None, :] * nb
+        c1 = rows + x1[None, None, :] * nb
+        index = np.concatenate([(c0 + ob0).ravel(), (c1 + ob0).ravel(), (c0 + ob1).ravel(), (c1 + ob1).ravel()])
+        weight = np.concatenate(
+            [(m0 * wx0).ravel(), (m0 * wx1).ravel(), (m1 * wx0).ravel(), (m1 * wx1).ravel()]
+        )
+        hx = np.bincount(index, weights=weight, minlength=n * h * wc * nb).astype(np.float32)
     return _pool_rows(hx.reshape(n, h, wc * nb), cell).reshape(n, hc, wc, nb)
 
 
