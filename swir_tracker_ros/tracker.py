@@ -11,7 +11,7 @@ import numpy as np
 from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
 from swir_tracker_ros.core.detector import Detection, FilterBank
 from swir_tracker_ros.core.params import PIPELINES, VARIANTS, TrackerParams
-from swir_tracker_ros.core.windows import grid_windows, scale_windows, search_window
+from swir_tracker_ros.core.windows import scale_windows, search_window
 from swir_tracker_ros.errors import KalmanError, TrackerError
 from swir_tracker_ros.kalman import (
     DISSERTATION_DCFCA,
@@ -85,6 +85,7 @@ class Tracker:
         self._occluded = 0
         self._apce_sum = self._apce_n = 0.0
         self._apce_est_sum = self._apce_est_n = 0.0
+        self._peak_sum = self._peak_n = 0.0
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -190,19 +191,16 @@ class Tracker:
         shown: tuple[Box, ...] = (wins[len(wins) // 2],)
         if failed:
             mode = SearchMode.MULTI_WINDOW
-            grid = grid_windows(wins[len(wins) // 2], p.grid_overlap)
-            others = [g for i, g in enumerate(grid) if i != 4]
+            mid = len(wins) // 2
+            # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
+            cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)
             if p.grid_scale_search:
-                cand = [
-                    *dets,
-                    *bank.detect(
-                        img,
-                        [w.scaled(f) for w in others for f in factors],
-                        [f for _ in others for f in factors],
-                    ),
-                ]
+                cand = [*dets, *cand]
+                for i, f in enumerate(factors):
+                    if i != mid:
+                        cand += bank.detect_grid(img, wins[i], p.grid_overlap, scale=f)[0]
             else:
-                cand = [dets[len(dets) // 2], *bank.detect(img, others)]
+                cand = [dets[mid], *cand]
             det = max(cand, key=lambda d: d.peak)
             shown = tuple(grid)
         size = (
@@ -211,7 +209,8 @@ class Tracker:
             else (pred.w, pred.h)
         )
         meas = Box.from_center(det.cx, det.cy, *size)
-        k = self._threshold(det.peak)
+        pv = self._calibrated_peak(det.peak, failed)
+        k = self._threshold(pv)
         info = kf.update(model.measurement_from_box(meas), threshold=k)
         if self._noise is not None and not info.coasted:
             kf.R = self._noise.push(model.measurement_from_box(meas), kf.x, kf.P, kf.H, used=info.used)
@@ -219,7 +218,7 @@ class Tracker:
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
         self._box = self._clamp_size(out)
-        updated = self._maybe_train(img, det, failed)
+        updated = self._maybe_train(img, det, failed, pv)
         if failed:
             self._occluded += 1
             state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
@@ -250,6 +249,23 @@ class Tracker:
         self._apce_n += 1
         return occluded
 
+    def _calibrated_peak(self, peak: float, failed: bool) -> float:
+        """KCF peak on the scale of paper 000 (eq. 38, update gate): peak x reference / mean normal peak.
+
+        The mean runs over the normal-mode (PSR >= threshold) frames so far, this one included; the
+        DCF-CA pipeline and `kcf_peak_reference = 0` use the raw peak (DCF-CA has its own gain).
+        """
+        ref = self.params.kcf_peak_reference
+        if self.params.pipeline != "kcf" or ref <= 0.0:
+            return peak
+        if not failed:
+            self._peak_sum += peak
+            self._peak_n += 1
+        if self._peak_n == 0:
+            return peak
+        mean = self._peak_sum / self._peak_n
+        return peak * ref / mean if mean > 1e-12 else peak
+
     def _threshold(self, peak: float) -> float | None:
         v = self.params.variant
         if v == "kalman":
@@ -258,13 +274,13 @@ class Tracker:
             return self.params.fixed_huber_threshold
         return (PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA)(peak)
 
-    def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
+    def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool, peak: float) -> bool:
         """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure."""
         p = self.params
         if failed:
             return False
         if p.pipeline == "kcf":
-            ok = det.peak > p.update_peak_threshold
+            ok = peak > p.update_peak_threshold
         else:
             mean = self._apce_est_sum / self._apce_est_n if self._apce_est_n else 0.0
             ok = self._apce_est_n == 0 or det.apce > p.apce_update_ratio * mean

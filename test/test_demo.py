@@ -55,6 +55,7 @@ def test_summary_scores_a_synthetic_run() -> None:
     assert s.occlusions == 1 and s.occlusions_survived == 1
     assert s.initial_offset_deg[0] == pytest.approx(2.0 * math.exp(-0.04))
     assert s.head_travel_deg[0] == pytest.approx(2.0 * (math.exp(-0.04) - math.exp(-6.0)), abs=0.01)
+    assert s.head_turn_towards_deg[0] == pytest.approx(s.head_travel_deg[0])  # it only ever turned left
     assert s.latency_p50_ms == pytest.approx(30.0, abs=0.5)
     assert s.camera_fps == pytest.approx(25.0, rel=0.01) and s.tracker_fps == pytest.approx(25.0, rel=0.01)
     assert s.precision_20px == 1.0 and s.final_state == "tracking"
@@ -153,8 +154,8 @@ def test_shortened_demo_end_to_end(tmp_path) -> None:
     assert run["outcome"] == "completed"
     pan0, tilt0 = run["initial_offset_deg"]
     assert pan0 > 1.0 and tilt0 < -0.3  # the pedestrian starts left of and below the optical axis
-    # The head turned towards the pedestrian: left and down, by a visible amount.
-    assert run["head_travel_deg"][0] > 0.5 and run["head_travel_deg"][1] < -0.2, run
+    # The head turned towards the pedestrian (left and down) by a visible amount.
+    assert run["head_turn_towards_deg"][0] > 0.5 and run["head_turn_towards_deg"][1] > 0.2, run
     assert run["in_view_at_end"], run
     assert run["frames"] > 25
     exits = data["processes"]["ego_on"]

@@ -54,16 +54,20 @@ def feature_shape(kind: str, patch_h: int, patch_w: int, cell: int) -> tuple[int
     return (1, patch_h, patch_w)
 
 
-def extract_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray:
-    """Feature maps (N, C, rows, cols) of patches (N, H, W) in [0, 1], multiplied by the cosine window.
+def unwindowed_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray:
+    """Feature maps (N, C, rows, cols) of patches (N, H, W) in [0, 1], before the cosine window.
 
     `hog`: 31-channel FHOG with `cell`-pixel cells; `gray`: the intensity minus 0.5 (KCF raw pixels).
     """
     if kind == "hog":
-        feats = fhog(patches, cell)
-    elif kind == "gray":
-        feats = (patches - np.float32(0.5))[:, None, :, :]
-    else:
-        raise ValueError(f"unknown feature kind {kind!r}; expected one of {FEATURE_KINDS}")
-    win = cosine_window(feats.shape[2], feats.shape[3])
-    return feats * win
+        return fhog(patches, cell)
+    if kind == "gray":
+        return (patches - np.float32(0.5))[:, None, :, :]
+    raise ValueError(f"unknown feature kind {kind!r}; expected one of {FEATURE_KINDS}")
+
+
+def extract_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray:
+    """`unwindowed_features` multiplied by the cosine window (KCF `get_features`)."""
+    feats = unwindowed_features(patches, kind, cell)
+    feats *= cosine_window(feats.shape[2], feats.shape[3])
+    return feats

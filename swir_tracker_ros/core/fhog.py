@@ -87,7 +87,7 @@ def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     m1 = mag * od
     m0 = mag - m1
     hc, wc = h // cell, w // cell
-    if w % cell == 0:
+    if w % cell == 0 and cell % 2 == 0:
         # one image of 18 orientation planes, each pixel's magnitude written into its two bins
         npx = n * h * w
         pix = np.arange(npx, dtype=np.intp).reshape(n, h, w)
@@ -105,7 +105,9 @@ def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
         rows = (np.arange(n * h, dtype=np.intp) * (wc * nb)).reshape(n, h, 1)
         c0 = rows + x0[None, None, :] * nb
         c1 = rows + x1[None, None, :] * nb
-        index = np.concatenate([(c0 + ob0).ravel(), (c1 + ob0).ravel(), (c0 + ob1).ravel(), (c1 + ob1).ravel()])
+        index = np.concatenate(
+            [(c0 + ob0).ravel(), (c1 + ob0).ravel(), (c0 + ob1).ravel(), (c1 + ob1).ravel()]
+        )
         weight = np.concatenate(
             [(m0 * wx0).ravel(), (m0 * wx1).ravel(), (m1 * wx0).ravel(), (m1 * wx1).ravel()]
         )

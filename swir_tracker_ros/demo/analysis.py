@@ -72,6 +72,8 @@ class RunSummary:
     final_state: str
     initial_offset_deg: list[float] = field(default_factory=list)  # target pan/tilt from the axis at start
     head_travel_deg: list[float] = field(default_factory=list)  # pan/tilt turned between start and end
+    # Largest pan/tilt turn towards the target's initial direction (positive: the head went that way).
+    head_turn_towards_deg: list[float] = field(default_factory=list)
     episodes: list[dict] = field(default_factory=list)
 
     def as_dict(self) -> dict:
@@ -182,11 +184,15 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
     outputs = [r for r in rec.error if t0 <= r[0] <= t1]
     latency = tracker_latency_ms(rec, t0, t1)
     joints = np.array([[r[0], r[2], r[3]] for r in rec.joints]) if rec.joints else np.zeros((0, 3))
-    travel = [0.0, 0.0]
+    travel, towards = [0.0, 0.0], [0.0, 0.0]
     if len(joints) and n:
         start = joints[np.argmin(np.abs(joints[:, 0] - t0))]
         end = joints[np.argmin(np.abs(joints[:, 0] - t1))]
         travel = [math.degrees(end[1] - start[1]), math.degrees(end[2] - start[2])]
+        during = joints[(joints[:, 0] >= t0) & (joints[:, 0] <= t1)]
+        if len(during):
+            for i, offset in enumerate((s.pan_error[0], s.tilt_error[0])):
+                towards[i] = math.degrees(float(np.max((during[:, 1 + i] - start[1 + i]) * np.sign(offset))))
     return RunSummary(
         label=rec.label, ego_motion_compensation=rec.ego_motion_compensation, outcome=rec.outcome,
         duration_s=float(s.t[-1]) if n else 0.0, frames=n,
@@ -204,7 +210,7 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
         lost_frames=sum(st == "lost" for st in s.state),
         final_state=next((r[2] for r in reversed(rec.state) if r[0] <= t1 + 1e-6), ""),
         initial_offset_deg=[math.degrees(s.pan_error[0]), math.degrees(s.tilt_error[0])] if n else [],
-        head_travel_deg=travel, episodes=[asdict(e) for e in episodes],
+        head_travel_deg=travel, head_turn_towards_deg=towards, episodes=[asdict(e) for e in episodes],
     )
 
 

@@ -110,6 +110,8 @@ ROWS = (
     ("centring error, 95th percentile (pixels)", "centring_error_p95_px", "{:.1f} px"),
     ("tracker box centre error, mean", "track_centre_error_mean_px", "{:.1f} px"),
     ("tracker precision at 20 px", "precision_20px", "{:.1%}"),
+    ("head turn towards the target's start, pan", "head_turn_towards_deg", "{0[0]:.2f} deg"),
+    ("head turn towards the target's start, tilt", "head_turn_towards_deg", "{0[1]:.2f} deg"),
     ("occlusions (visible < 50 %, >= 0.2 s)", "occlusions", "{}"),
     ("occlusions survived", "occlusions_survived", "{}"),
     ("camera frames/s", "camera_fps", "{:.1f}"),
@@ -124,7 +126,10 @@ ROWS = (
 def _fmt(fmt: str, value) -> str:
     if isinstance(value, float) and not math.isfinite(value):
         return "n/a"
-    return fmt.format(value)
+    try:
+        return fmt.format(value)
+    except (IndexError, TypeError, ValueError):
+        return "n/a"
 
 
 def summary_table(summaries: list[RunSummary]) -> list[list[str]]:
