@@ -214,7 +214,9 @@ def test_frame_stats_counts_skipped_frames_and_head_history() -> None:
     assert hist.at(1.0) is None
     hist.add(1.0, 0.0, 0.0)
     hist.add(2.0, 1.0, -1.0)
-    assert hist.at(1.5) == (0.5, -0.5) and hist.at(0.0) == (0.0, 0.0) and hist.at(9.0) == (1.0, -1.0)
+    assert hist.at(1.5) == (0.5, -0.5) and hist.at(0.0) == (0.0, 0.0)
+    # newer than the last sample: extrapolated with the last velocity, for at most 0.2 s
+    assert hist.at(2.1) == pytest.approx((1.1, -1.1)) and hist.at(9.0) == pytest.approx((1.2, -1.2))
     hist.add(0.5, 3.0, 3.0)  # time went backwards: history restarts
     assert hist.at(2.0) == (3.0, 3.0)
 

@@ -58,10 +58,17 @@ class TrackerNodeParams:
 
 
 class HeadPoseHistory:
-    """Recent (stamp, pan, tilt) samples; `at(t)` interpolates linearly, clamping to the ends."""
+    """Recent (stamp, pan, tilt) samples; `at(t)` interpolates linearly between samples.
 
-    def __init__(self, maxlen: int = 64) -> None:
+    Before the first sample the pose is held. After the last one it is extrapolated with the velocity of
+    the last two samples for at most `max_extrapolation` seconds, then held: joint states arrive later
+    than the frames they belong to, and holding the last pose would make the ego-motion shift lag
+    whenever the head accelerates.
+    """
+
+    def __init__(self, maxlen: int = 64, max_extrapolation: float = 0.2) -> None:
         self.samples: deque[tuple[float, float, float]] = deque(maxlen=maxlen)
+        self.max_extrapolation = max_extrapolation
 
     def add(self, stamp: float, pan: float, tilt: float) -> None:
         if self.samples and stamp < self.samples[-1][0]:
@@ -76,7 +83,12 @@ class HeadPoseHistory:
         if i == 0:
             return self.samples[0][1:]
         if i >= len(times):
-            return self.samples[-1][1:]
+            t1, p1, q1 = self.samples[-1]
+            if len(times) < 2 or times[-2] >= t1:
+                return p1, q1
+            t0, p0, q0 = self.samples[-2]
+            dt = min(stamp - t1, self.max_extrapolation) / (t1 - t0)
+            return p1 + dt * (p1 - p0), q1 + dt * (q1 - q0)
         (t0, p0, q0), (t1, p1, q1) = self.samples[i - 1], self.samples[i]
         a = (stamp - t0) / (t1 - t0) if t1 > t0 else 1.0
         return p0 + a * (p1 - p0), q0 + a * (q1 - q0)
