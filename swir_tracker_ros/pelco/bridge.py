@@ -108,7 +108,12 @@ class PositionerBridge:
         pan, tilt = self.pan.known(now, timeout), self.tilt.known(now, timeout)
         if pan is None or tilt is None:
             return None
-        return Pose(pan, tilt, self.pan.velocity, self.tilt.velocity, min(self.pan.time, self.tilt.time))
+        # The joints are queried one after the other: bring the older reading forward to the newer one's
+        # time with its velocity, so that the pose and its stamp describe one instant.
+        t = max(self.pan.time, self.tilt.time)
+        pan += self.pan.velocity * (t - self.pan.time)
+        tilt += self.tilt.velocity * (t - self.tilt.time)
+        return Pose(pan, tilt, self.pan.velocity, self.tilt.velocity, t)
 
     def stats(self) -> dict[str, str]:
         return {
