@@ -154,3 +154,38 @@ def test_large_targets_are_tracked_at_half_resolution() -> None:
     small, large = FilterBank(TrackerParams(), 40, 80), FilterBank(TrackerParams(), 100, 120)
     assert small.model_scale == 1.0 and (small.tw, small.th) == (100, 200)
     assert large.model_scale == 0.5 and (large.tw, large.th) == (124, 152)  # 2.5 x box / 2, whole cells
+
+
+def test_fhog_orientation_binning_is_soft() -> None:
+    """Piotr's fhog (the KCF reference): a gradient between two bin centres is shared linearly."""
+    from swir_tracker_ros.core.fhog import cell_histograms
+
+    yy, xx = np.mgrid[0:32, 0:32].astype(np.float32)
+    for deg, share in ((0.0, 0.0), (5.0, 0.25), (10.0, 0.5)):
+        t = np.deg2rad(deg)
+        ramp = (np.cos(t) * xx + np.sin(t) * yy) / 64.0  # gradient direction `deg` everywhere
+        hist = cell_histograms(ramp[None].astype(np.float32), 4)[0, 2:-2, 2:-2]
+        b0, b1 = hist[..., 0].sum(), hist[..., 1].sum()
+        assert b1 / (b0 + b1) == pytest.approx(share, abs=0.02)
+        assert hist[..., 2:].sum() < 1e-3 * (b0 + b1)
+
+
+@pytest.mark.parametrize("feature", ["hog", "gray"])
+def test_grid_features_cut_from_the_union_match_single_windows(feature: str) -> None:
+    """The 3x3 grid's maps come from one feature computation on the union; away from the window borders
+    (where FHOG's block normalisation sees different neighbours) they equal per-window features."""
+    from swir_tracker_ros.core.detector import FilterBank
+    from swir_tracker_ros.core.params import TrackerParams
+
+    img = textured(300, 360, seed=4)
+    bank = FilterBank(TrackerParams(feature=feature), 22.0, 44.0)
+    window = search_window(181.3, 149.7, 22.0 * 1.04, 44.0 * 1.04, bank.padding)
+    grid, wins = bank.grid_features(img, window, 1.0 / 3.0)
+    assert len(wins) == 9 and wins[4] == window
+    steps = {round(wins[1].cx - wins[0].cx, 6), round(wins[2].cx - wins[1].cx, 6)}
+    assert len(steps) == 1  # a regular grid; overlap within half a cell of 1/3
+    assert abs(1.0 - (wins[1].cx - wins[0].cx) / window.w - 1.0 / 3.0) <= 0.5 * bank.cell / bank.tw + 1e-9
+    single = bank.features(img, wins)
+    b = 2 if feature == "hog" else 1
+    # (warpAffine quantises sample positions to 1/32 px, hence the tolerance)
+    assert np.allclose(grid[:, :, b:-b, b:-b], single[:, :, b:-b, b:-b], atol=5e-3)
