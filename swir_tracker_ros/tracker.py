@@ -85,7 +85,6 @@ class Tracker:
         self._occluded = 0
         self._apce_sum = self._apce_n = 0.0
         self._apce_est_sum = self._apce_est_n = 0.0
-        self._peak_sum = self._peak_n = 0.0
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -209,8 +208,7 @@ class Tracker:
             else (pred.w, pred.h)
         )
         meas = Box.from_center(det.cx, det.cy, *size)
-        pv = self._calibrated_peak(det.peak, failed)
-        k = self._threshold(pv)
+        k = self._threshold(det.peak)
         info = kf.update(model.measurement_from_box(meas), threshold=k)
         if self._noise is not None and not info.coasted:
             kf.R = self._noise.push(model.measurement_from_box(meas), kf.x, kf.P, kf.H, used=info.used)
@@ -218,7 +216,7 @@ class Tracker:
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
         self._box = self._clamp_size(out)
-        updated = self._maybe_train(img, det, failed, pv)
+        updated = self._maybe_train(img, det, failed)
         if failed:
             self._occluded += 1
             state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
@@ -249,23 +247,6 @@ class Tracker:
         self._apce_n += 1
         return occluded
 
-    def _calibrated_peak(self, peak: float, failed: bool) -> float:
-        """KCF peak on the scale of paper 000 (eq. 38, update gate): peak x reference / mean normal peak.
-
-        The mean runs over the normal-mode (PSR >= threshold) frames so far, this one included; the
-        DCF-CA pipeline and `kcf_peak_reference = 0` use the raw peak (DCF-CA has its own gain).
-        """
-        ref = self.params.kcf_peak_reference
-        if self.params.pipeline != "kcf" or ref <= 0.0:
-            return peak
-        if not failed:
-            self._peak_sum += peak
-            self._peak_n += 1
-        if self._peak_n == 0:
-            return peak
-        mean = self._peak_sum / self._peak_n
-        return peak * ref / mean if mean > 1e-12 else peak
-
     def _threshold(self, peak: float) -> float | None:
         v = self.params.variant
         if v == "kalman":
@@ -274,13 +255,13 @@ class Tracker:
             return self.params.fixed_huber_threshold
         return (PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA)(peak)
 
-    def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool, peak: float) -> bool:
+    def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
         """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure."""
         p = self.params
         if failed:
             return False
         if p.pipeline == "kcf":
-            ok = peak > p.update_peak_threshold
+            ok = det.peak > p.update_peak_threshold
         else:
             mean = self._apce_est_sum / self._apce_est_n if self._apce_est_n else 0.0
             ok = self._apce_est_n == 0 or det.apce > p.apce_update_ratio * mean

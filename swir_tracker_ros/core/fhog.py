@@ -72,13 +72,18 @@ def _triangle_kernel(cell: int) -> np.ndarray:
     return (1.0 - np.abs(x) / cell).astype(np.float32)[None, :]
 
 
-def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
-    """Gradient histograms, shape (N, hc, wc, 18): soft orientation bins, bilinear spatial interpolation.
+@lru_cache(maxsize=32)
+def _pixel_index(n: int, h: int, w: int) -> np.ndarray:
+    return np.arange(n * h * w, dtype=np.intp).reshape(n, h, w)
 
-    Patches whose sides are whole cells (every template) take the fast path: each pixel's magnitude is
-    written into its two orientation bins of a dense (cells, 18, cell) buffer (two scatters, no
-    accumulation), the x interpolation is one small matrix product over the `cell` pixel offsets and
-    the y interpolation `cell` vectorised row passes. Other sizes use one bincount (4 entries a pixel).
+
+def orientation_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
+    """Gradient histograms, channel first (18, N, hc, wc): soft orientation bins, bilinear spatial cells.
+
+    Patches whose width is whole cells (every template) with an even cell take the fast path: one image
+    of 18 orientation planes gets each pixel's magnitude in its two bins (two scatters, no accumulation),
+    one `cv2.filter2D` with the 2cell-tap triangle does the x interpolation (kept at each cell start) and
+    `cell` vectorised row passes the y interpolation. Other sizes use one bincount (4 entries a pixel).
     """
     n, h, w = patches.shape
     mag, ang = gradients(patches)
@@ -88,18 +93,20 @@ def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     m0 = mag - m1
     hc, wc = h // cell, w // cell
     if w % cell == 0 and cell % 2 == 0:
-        # one image of 18 orientation planes, each pixel's magnitude written into its two bins
         npx = n * h * w
-        pix = np.arange(npx, dtype=np.intp).reshape(n, h, w)
+        pix = _pixel_index(n, h, w)
         planes = np.zeros(nb * npx, dtype=np.float32)
-        planes[ob0 * npx + pix] = m0
-        planes[ob1 * npx + pix] = m1  # ob1 != ob0, so plain assignment is exact
-        # x interpolation: the 2cell-tap triangle at every pixel (zero outside), sampled at each cell start
+        ob0 *= npx
+        ob0 += pix
+        planes[ob0] = m0
+        ob1 *= npx
+        ob1 += pix
+        planes[ob1] = m1  # the two bins differ, so plain assignment is exact
         filt = cv2.filter2D(
             planes.reshape(nb * n * h, w), -1, _triangle_kernel(cell), anchor=(cell // 2, 0),
             borderType=cv2.BORDER_CONSTANT,
         )
-        hx = np.ascontiguousarray(filt[:, :: cell].reshape(nb, n * h, wc).transpose(1, 2, 0))
+        hx = np.ascontiguousarray(filt[:, ::cell]).reshape(nb * n, h, wc)
     else:
         x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
         rows = (np.arange(n * h, dtype=np.intp) * (wc * nb)).reshape(n, h, 1)
@@ -112,7 +119,13 @@ def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
             [(m0 * wx0).ravel(), (m0 * wx1).ravel(), (m1 * wx0).ravel(), (m1 * wx1).ravel()]
         )
         hx = np.bincount(index, weights=weight, minlength=n * h * wc * nb).astype(np.float32)
-    return _pool_rows(hx.reshape(n, h, wc * nb), cell).reshape(n, hc, wc, nb)
+        hx = np.ascontiguousarray(hx.reshape(n, h, wc, nb).transpose(3, 0, 1, 2)).reshape(nb * n, h, wc)
+    return _pool_rows(hx, cell).reshape(nb, n, hc, wc)
+
+
+def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
+    """`orientation_histograms` as (N, hc, wc, 18) (a view)."""
+    return np.moveaxis(orientation_histograms(patches, cell), 0, -1)
 
 
 def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
@@ -145,10 +158,12 @@ def fhog(patches: np.ndarray, cell: int = 4) -> np.ndarray:
     if patches.ndim == 2:
         patches = patches[None]
     patches = np.ascontiguousarray(patches, dtype=np.float32)
-    hist = cell_histograms(patches, cell)  # (n, hc, wc, 18)
-    n, hc, wc, _ = hist.shape
-    insens = hist[..., :N_ORIENT] + hist[..., N_ORIENT:]
-    energy = np.einsum("nijk,nijk->nij", insens, insens)
+    hist = orientation_histograms(patches, cell)  # (18, n, hc, wc)
+    _, n, hc, wc = hist.shape
+    both = np.empty((3 * N_ORIENT, n, hc, wc), dtype=np.float32)  # 18 sensitive + 9 insensitive
+    both[: 2 * N_ORIENT] = hist
+    insens = np.add(hist[:N_ORIENT], hist[N_ORIENT:], out=both[2 * N_ORIENT :])
+    energy = np.einsum("knij,knij->nij", insens, insens)
     e = np.empty((n, hc + 2, wc + 2), dtype=np.float32)  # edge-replicated border of one cell
     e[:, 1:-1, 1:-1] = energy
     e[:, 0, 1:-1], e[:, -1, 1:-1] = energy[:, 0], energy[:, -1]
@@ -156,13 +171,14 @@ def fhog(patches: np.ndarray, cell: int = 4) -> np.ndarray:
     # sum of each 2x2 block of (padded) cells; block (i, j) covers padded cells i..i+1, j..j+1
     blocks = e[:, :-1, :-1] + e[:, 1:, :-1] + e[:, :-1, 1:] + e[:, 1:, 1:]  # (n, hc+1, wc+1)
     inv = 1.0 / np.sqrt(blocks + np.float32(1e-4 / (4.0 * cell**4 * 2.0)))
-    norms = np.empty((4, n, hc, wc, 1), dtype=np.float32)  # the 4 blocks around each cell
-    norms[0, ..., 0], norms[1, ..., 0] = inv[:, :-1, :-1], inv[:, :-1, 1:]
-    norms[2, ..., 0], norms[3, ..., 0] = inv[:, 1:, :-1], inv[:, 1:, 1:]
-    both = norms * np.concatenate([hist, insens], axis=-1)[None]  # (4, n, hc, wc, 27)
-    np.minimum(both, np.float32(CLIP), out=both)
-    out = np.empty((n, hc, wc, N_CHANNELS), dtype=np.float32)
-    out[..., : 3 * N_ORIENT] = (both[0] + both[1] + both[2] + both[3]) * np.float32(0.5)
-    out[..., 3 * N_ORIENT :] = np.moveaxis(both[..., : 2 * N_ORIENT].sum(axis=-1), 0, -1)
-    out[..., 3 * N_ORIENT :] *= np.float32(TEXTURE_WEIGHT)
-    return np.ascontiguousarray(out.transpose(0, 3, 1, 2))
+    out = np.zeros((n, N_CHANNELS, hc, wc), dtype=np.float32)
+    orient = np.moveaxis(out[:, : 3 * N_ORIENT], 1, 0)  # (27, n, hc, wc) view
+    clip = np.float32(CLIP)
+    t = np.empty_like(both)
+    for q, norm in enumerate((inv[:, :-1, :-1], inv[:, :-1, 1:], inv[:, 1:, :-1], inv[:, 1:, 1:])):
+        np.multiply(both, norm, out=t)  # the 4 normalisation blocks around each cell
+        np.minimum(t, clip, out=t)
+        orient += t
+        out[:, 3 * N_ORIENT + q] = t[: 2 * N_ORIENT].sum(axis=0) * np.float32(TEXTURE_WEIGHT)
+    orient *= np.float32(0.5)
+    return out

@@ -84,14 +84,6 @@ class TrackerParams:
     update_peak_threshold: float = _f(
         0.5, "KCF: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0
     )
-    kcf_peak_reference: float = _f(
-        0.525,
-        "(ours) KCF peak calibration: the peak value fed to eq. 38 and to the update gate is the raw peak "
-        "times this / running mean peak of the normal-mode frames, i.e. regular tracking maps to the "
-        "centre of eq. 38's regular band [0.35, 0.7]; 0: raw peaks (paper 000 as printed)",
-        0.0,
-        2.0,
-    )
     apce_occlusion_ratio: float = _f(
         0.6, "DCF-CA: occlusion when APCE <= ratio x mean APCE (eq. 4.96)", 0.0, 2.0
     )
