@@ -5,12 +5,14 @@ VPY     := $(VENV)/bin/python
 STAMP   := $(VENV)/.installed
 BENCH   := .venv-bench
 BSTAMP  := $(BENCH)/.installed
+TRAIN   := .venv-train
+TSTAMP  := $(TRAIN)/.installed
 PIP_FLAGS ?= --disable-pip-version-check -q
 
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PYTHONDONTWRITEBYTECODE = 1
 
-.PHONY: venv test lint demo bench bench-venv regress train clean
+.PHONY: venv test lint demo bench bench-venv train-venv regress train clean
 
 venv: $(STAMP)
 
@@ -29,16 +31,22 @@ $(BSTAMP): requirements-bench.txt
 	touch $@
 
 # Training-only venv (PyTorch CPU) for the Siamese appearance nets; the runtime never needs it.
-train: $(STAMP)
-	test -x .venv-train/bin/python || $(PY) -m venv .venv-train
-	.venv-train/bin/python -m pip install $(PIP_FLAGS) -r requirements-train.txt
-	.venv-train/bin/python -m pip install $(PIP_FLAGS) --no-deps -e .
-	.venv-train/bin/python training/train_siamese.py
+train-venv: $(TSTAMP)
+
+$(TSTAMP): requirements-train.txt setup.py
+	test -x $(TRAIN)/bin/python || $(PY) -m venv $(TRAIN)
+	$(TRAIN)/bin/python -m pip install $(PIP_FLAGS) -r requirements-train.txt
+	$(TRAIN)/bin/python -m pip install $(PIP_FLAGS) --no-deps -e .
+	touch $@
+
+train: $(TSTAMP)
+	$(TRAIN)/bin/python training/train_siamese.py
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 
-test: $(STAMP)
+# The suite also checks OpenCV's trackers (.venv-bench) and the ONNX export against torch (.venv-train).
+test: $(STAMP) $(BSTAMP) $(TSTAMP)
 	$(VENV)/bin/ruff check .
 	$(VPY) -m pytest test -q -p no:cacheprovider
 
@@ -53,4 +61,4 @@ bench: $(STAMP) $(BSTAMP)
 	$(VPY) benchmarks/node_latency.py
 
 clean:
-	rm -rf $(VENV) $(BENCH) .venv-train build install log out *.egg-info
+	rm -rf $(VENV) $(BENCH) $(TRAIN) build install log out *.egg-info
