@@ -5,9 +5,7 @@ from __future__ import annotations
 
 import sys
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Image, JointState, RegionOfInterest
@@ -33,6 +31,7 @@ from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
 from swir_tracker_ros.acquisition.params import AcquisitionParams
 from swir_tracker_ros.errors import AcquisitionError, ParameterError
 from swir_tracker_ros.nodes.ros_params import bind_parameters
+from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.types import Box, TrackState
 
 NODE_NAME = "acquisition"
@@ -167,23 +166,7 @@ class AcquisitionNode(Node):
 
 def main(argv: list[str] | None = None) -> int:
     """Console entry point `acquisition`: spin until SIGINT/SIGTERM; exit 2 on a bad parameter or model."""
-    args = list(sys.argv if argv is None else argv)
-    rclpy.init(args=args)
-    node = None
-    code = 0
-    try:
-        node = AcquisitionNode()
-        rclpy.spin(node)
-    except (ParameterError, AcquisitionError) as exc:
-        rclpy.logging.get_logger(NODE_NAME).error(f"cannot start: {exc}")
-        code = 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return run_node(NODE_NAME, AcquisitionNode, argv, startup_errors=(ParameterError, AcquisitionError))
 
 
 if __name__ == "__main__":

@@ -6,10 +6,8 @@ from __future__ import annotations
 import sys
 import time
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -20,8 +18,8 @@ from msg_adapters.geometry import pan_tilt_error_from_msg
 from msg_adapters.joint_state import PanTiltSample, pan_tilt_to_joint_state
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
-from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.ros_params import bind_parameters
+from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.pelco.bridge import PositionerBridge
 from swir_tracker_ros.pelco.params import PositionerParams
 
@@ -110,30 +108,16 @@ class PositionerNode(Node):
         self.diag_pub.publish(diagnostics.diagnostic_array(header(self._now_seconds()), [st]))
 
 
+def _stop_head(node: PositionerNode) -> None:
+    """SIGINT / SIGTERM (rclpy's handlers shut the context down) and exceptions all land here: the head
+    is told to stop before the port closes."""
+    sent = node.bridge.shutdown()
+    print(f"positioner_bridge: stop {'written' if sent else 'NOT written (port unavailable)'} "
+          "before closing the port", file=sys.stderr, flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
-    rclpy.init(args=argv)
-    try:
-        node = PositionerNode()
-    except ParameterError as exc:
-        print(f"positioner_bridge: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:
-        if rclpy.ok():  # a real failure; after a signal, spin may fail on the invalidated context instead
-            raise
-    finally:
-        # SIGINT / SIGTERM (rclpy's handlers shut the context down) and exceptions all land here:
-        # the head is told to stop before the port closes.
-        sent = node.bridge.shutdown()
-        print(f"positioner_bridge: stop {'written' if sent else 'NOT written (port unavailable)'} "
-              "before closing the port", file=sys.stderr, flush=True)
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node("positioner_bridge", PositionerNode, argv, before_destroy=_stop_head)
 
 
 if __name__ == "__main__":

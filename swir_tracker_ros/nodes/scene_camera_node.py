@@ -8,10 +8,8 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PolygonStamped
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image, JointState
@@ -26,6 +24,7 @@ from msg_adapters.stamps import header as make_header
 from swir_tracker_ros.demo.world import SceneClock, build_scene, scene_names
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.ros_params import bind_parameters
+from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.scene.camera import CameraView
 from swir_tracker_ros.scene.world import Truth
 
@@ -199,31 +198,7 @@ class SceneCameraNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
-    try:
-        node = SceneCameraNode()
-    except ParameterError as exc:
-        print(f"scene_camera: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        rclpy.try_shutdown()
-        return 0
-    except Exception:
-        if rclpy.ok():
-            raise
-        return 0  # SIGINT arrived while the node was being built
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:
-        if node.context.ok():
-            raise  # a real error; otherwise a callback raced with the SIGINT shutdown
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node("scene_camera", SceneCameraNode, args)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,6 @@ import time
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
@@ -27,8 +26,9 @@ from msg_adapters.image import image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.stamps import stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
-from swir_tracker_ros.errors import ParameterError, TrackerError
+from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.ros_params import bind_parameters
+from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
@@ -336,22 +336,7 @@ def main(argv: list[str] | None = None) -> int:
     if "--params-yaml" in user_args:
         sys.stdout.write(params_yaml())
         return 0
-    rclpy.init(args=args)
-    node = None
-    code = 0
-    try:
-        node = TrackerNode()
-        rclpy.spin(node)
-    except ParameterError as exc:
-        rclpy.logging.get_logger(NODE_NAME).error(f"bad parameter: {exc}")
-        code = 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return run_node(NODE_NAME, TrackerNode, args)
 
 
 if __name__ == "__main__":
