@@ -146,7 +146,7 @@ def main() -> None:
         f"({n_frac:.0%} normal)"
     )
     print(
-        f"ours occlusion mode (9 windows)  : {o_fps:7.1f} fps wall, {o_cpu:7.1f} fps cpu ({o_frac:.0%} grid)"
+        f"ours occlusion (5 scales + grid) : {o_fps:7.1f} fps wall, {o_cpu:7.1f} fps cpu ({o_frac:.0%} grid)"
     )
     ocv = time_opencv(to8bit(frames))
     kcf, csrt = ocv.get("kcf", {}), ocv.get("csrt", {})

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -100,3 +101,23 @@ def wait_for(predicate, timeout: float, interval: float = 0.05) -> bool:
             return True
         time.sleep(interval)
     return bool(predicate())
+
+
+@contextlib.contextmanager
+def ros_probe(probe_cls):
+    """Build `probe_cls(context)` in a private rclpy context; tear down its executor, node and context.
+
+    A probe is the test's side of the ROS graph: it owns `node` and `executor` attributes.
+    """
+    import rclpy
+    from rclpy.context import Context
+
+    ctx = Context()
+    rclpy.init(context=ctx)
+    probe = probe_cls(ctx)
+    try:
+        yield probe
+    finally:
+        probe.executor.shutdown()
+        probe.node.destroy_node()
+        rclpy.try_shutdown(context=ctx)

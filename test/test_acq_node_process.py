@@ -7,8 +7,7 @@ import time
 from collections.abc import Iterator
 
 import pytest
-import rclpy
-from conftest import REPO, ProcessSet
+from conftest import REPO, ProcessSet, ros_probe
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -69,15 +68,8 @@ class Probe:
 
 @pytest.fixture
 def probe() -> Iterator[Probe]:
-    ctx = Context()
-    rclpy.init(context=ctx)
-    p = Probe(ctx)
-    try:
+    with ros_probe(Probe) as p:
         yield p
-    finally:
-        p.executor.shutdown()
-        p.node.destroy_node()
-        rclpy.try_shutdown(context=ctx)
 
 
 def _lost() -> DiagnosticArray:

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import pytest
 import rclpy
-from conftest import REPO
+from conftest import REPO, ros_probe
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
@@ -85,14 +85,8 @@ class Probe:
 
 @pytest.fixture
 def probe() -> Iterator[Probe]:
-    ctx = Context()
-    rclpy.init(context=ctx)
-    p = Probe(ctx)
-    try:
+    with ros_probe(Probe) as p:
         yield p
-    finally:
-        p.node.destroy_node()
-        rclpy.try_shutdown(context=ctx)
 
 
 def velocity_now(trace) -> tuple[float, float]:

@@ -11,8 +11,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-import rclpy
-from conftest import REPO, ProcessSet
+from conftest import REPO, ProcessSet, ros_probe
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.context import Context
@@ -128,15 +127,8 @@ class Probe:
 
 @pytest.fixture
 def probe() -> Iterator[Probe]:
-    ctx = Context()
-    rclpy.init(context=ctx)
-    p = Probe(ctx)
-    try:
+    with ros_probe(Probe) as p:
         yield p
-    finally:
-        p.executor.shutdown()
-        p.node.destroy_node()
-        rclpy.try_shutdown(context=ctx)
 
 
 def start_tracker(processes: ProcessSet, probe: Probe):

@@ -65,25 +65,22 @@ def _orientation_bins(ang: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return ob0, ob1, od
 
 
-@lru_cache(maxsize=8)
-def _triangle_kernel(cell: int) -> np.ndarray:
-    """1 x 2cell kernel of the bilinear pixel -> cell weights: pixel 2cell-1-j ... weight 1 - |d| / cell."""
-    x = np.arange(2 * cell, dtype=np.float64) - (cell - 0.5)
-    return (1.0 - np.abs(x) / cell).astype(np.float32)[None, :]
-
-
 @lru_cache(maxsize=32)
-def _pixel_index(n: int, h: int, w: int) -> np.ndarray:
-    return np.arange(n * h * w, dtype=np.intp).reshape(n, h, w)
+def _hist_plan(n: int, h: int, w: int, cell: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per-pixel flat indices of its two x cells in a channel-first (18, n*h, wc) accumulator, and the
+    two bilinear x weights (the orientation offset bin * n*h*wc is added per frame)."""
+    x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
+    wc = w // cell
+    rows = (np.arange(n * h, dtype=np.intp) * wc).reshape(n, h, 1)
+    return rows + x0[None, None, :], rows + x1[None, None, :], wx0, wx1
 
 
 def orientation_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     """Gradient histograms, channel first (18, N, hc, wc): soft orientation bins, bilinear spatial cells.
 
-    Patches whose width is whole cells (every template) with an even cell take the fast path: one image
-    of 18 orientation planes gets each pixel's magnitude in its two bins (two scatters, no accumulation),
-    one `cv2.filter2D` with the 2cell-tap triangle does the x interpolation (kept at each cell start) and
-    `cell` vectorised row passes the y interpolation. Other sizes use one bincount (4 entries a pixel).
+    One `np.bincount` (4 entries a pixel: 2 orientation bins x 2 x cells) accumulates straight into the
+    channel-first layout the normalisation uses, then `cell` vectorised row passes do the y interpolation.
+    (An 18-plane scatter + `cv2.filter2D` variant gave the same numbers but was ~50 % slower here.)
     """
     n, h, w = patches.shape
     mag, ang = gradients(patches)
@@ -92,35 +89,19 @@ def orientation_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     m1 = mag * od
     m0 = mag - m1
     hc, wc = h // cell, w // cell
-    if w % cell == 0 and cell % 2 == 0:
-        npx = n * h * w
-        pix = _pixel_index(n, h, w)
-        planes = np.zeros(nb * npx, dtype=np.float32)
-        ob0 *= npx
-        ob0 += pix
-        planes[ob0] = m0
-        ob1 *= npx
-        ob1 += pix
-        planes[ob1] = m1  # the two bins differ, so plain assignment is exact
-        filt = cv2.filter2D(
-            planes.reshape(nb * n * h, w), -1, _triangle_kernel(cell), anchor=(cell // 2, 0),
-            borderType=cv2.BORDER_CONSTANT,
-        )
-        hx = np.ascontiguousarray(filt[:, ::cell]).reshape(nb * n, h, wc)
-    else:
-        x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
-        rows = (np.arange(n * h, dtype=np.intp) * (wc * nb)).reshape(n, h, 1)
-        c0 = rows + x0[None, None, :] * nb
-        c1 = rows + x1[None, None, :] * nb
-        index = np.concatenate(
-            [(c0 + ob0).ravel(), (c1 + ob0).ravel(), (c0 + ob1).ravel(), (c1 + ob1).ravel()]
-        )
-        weight = np.concatenate(
-            [(m0 * wx0).ravel(), (m0 * wx1).ravel(), (m1 * wx0).ravel(), (m1 * wx1).ravel()]
-        )
-        hx = np.bincount(index, weights=weight, minlength=n * h * wc * nb).astype(np.float32)
-        hx = np.ascontiguousarray(hx.reshape(n, h, wc, nb).transpose(3, 0, 1, 2)).reshape(nb * n, h, wc)
-    return _pool_rows(hx, cell).reshape(nb, n, hc, wc)
+    c0, c1, wx0, wx1 = _hist_plan(n, h, w, cell)
+    plane = n * h * wc
+    ob0 *= plane
+    ob1 *= plane
+    npx = n * h * w
+    index = np.empty(4 * npx, dtype=np.intp)
+    weight = np.empty(4 * npx, dtype=np.float64)
+    for q, (cx, ob, wx, m) in enumerate(((c0, ob0, wx0, m0), (c1, ob0, wx1, m0), (c0, ob1, wx0, m1),
+                                         (c1, ob1, wx1, m1))):  # 4 vectorised passes
+        np.add(cx, ob, out=index[q * npx : (q + 1) * npx].reshape(n, h, w))
+        np.multiply(m, wx, out=weight[q * npx : (q + 1) * npx].reshape(n, h, w))
+    hx = np.bincount(index, weights=weight, minlength=nb * plane).astype(np.float32)
+    return _pool_rows(hx.reshape(nb * n, h, wc), cell).reshape(nb, n, hc, wc)
 
 
 def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
