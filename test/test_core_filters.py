@@ -156,15 +156,24 @@ def test_large_targets_are_tracked_at_half_resolution() -> None:
     assert large.model_scale == 0.5 and (large.tw, large.th) == (124, 152)  # 2.5 x box / 2, whole cells
 
 
-def test_fhog_orientation_binning_is_soft() -> None:
-    """Piotr's fhog (the KCF reference): a gradient between two bin centres is shared linearly."""
+def test_fhog_orientation_binning_hard_and_soft() -> None:
+    """Soft (Piotr's fhog, the KCF reference): a gradient between two bin centres is shared linearly;
+    hard (the default): it goes whole to the nearest bin."""
     from swir_tracker_ros.core.fhog import cell_histograms
+
+    yy, xx = np.mgrid[0:32, 0:32].astype(np.float32)
+    for deg, upper in ((5.0, 0.0), (15.0, 1.0)):
+        t = np.deg2rad(deg)
+        ramp = (np.cos(t) * xx + np.sin(t) * yy) / 64.0
+        hist = cell_histograms(ramp[None].astype(np.float32), 4)[0, 2:-2, 2:-2]
+        b0, b1 = hist[..., 0].sum(), hist[..., 1].sum()
+        assert b1 / (b0 + b1) == pytest.approx(upper, abs=1e-6)
 
     yy, xx = np.mgrid[0:32, 0:32].astype(np.float32)
     for deg, share in ((0.0, 0.0), (5.0, 0.25), (10.0, 0.5)):
         t = np.deg2rad(deg)
         ramp = (np.cos(t) * xx + np.sin(t) * yy) / 64.0  # gradient direction `deg` everywhere
-        hist = cell_histograms(ramp[None].astype(np.float32), 4)[0, 2:-2, 2:-2]
+        hist = cell_histograms(ramp[None].astype(np.float32), 4, soft=True)[0, 2:-2, 2:-2]
         b0, b1 = hist[..., 0].sum(), hist[..., 1].sum()
         assert b1 / (b0 + b1) == pytest.approx(share, abs=0.02)
         assert hist[..., 2:].sum() < 1e-3 * (b0 + b1)

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swir_tracker_ros.core.features import FEATURE_KINDS
 from swir_tracker_ros.core.kcf import _check, gaussian_label_spectrum, irfft2, linear_correlation, rfft2
 from swir_tracker_ros.errors import ParameterError
 
@@ -31,7 +32,7 @@ class DCFCAParams:
     n_context: int = field(
         default=4, metadata={"doc": "context patches (up, down, left, right)", "min": 0, "max": 4}
     )
-    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": ("hog", "gray")})
+    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": FEATURE_KINDS})
     cell_size: int = field(default=4, metadata={"doc": "feature cell in pixels", "min": 1, "max": 8})
 
     def validate(self) -> None:
@@ -41,8 +42,8 @@ class DCFCAParams:
         _check("interp_factor", self.interp_factor, 0.0, 1.0)
         _check("output_sigma_factor", self.output_sigma_factor, 0.01, 1.0)
         _check("n_context", self.n_context, 0, 4)
-        if self.feature not in ("hog", "gray"):
-            raise ParameterError(f"feature={self.feature!r} is not one of ('hog', 'gray')")
+        if self.feature not in FEATURE_KINDS:
+            raise ParameterError(f"feature={self.feature!r} is not one of {FEATURE_KINDS}")
         _check("cell_size", self.cell_size, 1, 8)
 
 

@@ -47,7 +47,7 @@ class FilterBank:
 
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         self.kind = p.feature
-        self.cell = p.cell_size if p.feature == "hog" else 1
+        self.cell = 1 if p.feature == "gray" else p.cell_size
         self.gain = 1.0
         self.reference_peak = p.dcf_reference_peak
         self.exclusion = max(1, math.ceil(p.psr_exclusion_px / self.cell))

@@ -52,13 +52,21 @@ def gradients(patches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mag.reshape(n, h, w), ang.reshape(n, h, w)
 
 
-def _orientation_bins(ang: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Soft orientation binning (Piotr's fhog, softBin = -1): the two nearest of the 18 contrast-sensitive
-    bins (centres at multiples of 20 degrees) and the weight od of the upper one (1 - od for the lower)."""
+def _orientation_bins(ang: np.ndarray, soft: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Orientation bins among the 18 contrast-sensitive ones (centres at multiples of 20 degrees): the
+    lower bin ob0, the upper bin ob1 and the weight od of the upper one (1 - od for the lower).
+
+    soft: the two nearest bins share the gradient linearly (Piotr's fhog, softBin = -1); hard: the whole
+    gradient goes to the nearest bin (od = 0).
+    """
     nb = 2 * N_ORIENT
     o = ang * np.float32(nb / (2.0 * np.pi))
-    ob0 = o.astype(np.intp)  # floor, o >= 0
-    od = o - ob0.astype(np.float32)
+    if soft:
+        ob0 = o.astype(np.intp)  # floor, o >= 0
+        od = o - ob0.astype(np.float32)
+    else:
+        ob0 = np.rint(o).astype(np.intp)
+        od = np.zeros_like(o)
     ob0[ob0 >= nb] -= nb
     ob1 = ob0 + 1
     ob1[ob1 >= nb] = 0
@@ -75,8 +83,9 @@ def _hist_plan(n: int, h: int, w: int, cell: int) -> tuple[np.ndarray, np.ndarra
     return rows + x0[None, None, :], rows + x1[None, None, :], wx0, wx1
 
 
-def orientation_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
-    """Gradient histograms, channel first (18, N, hc, wc): soft orientation bins, bilinear spatial cells.
+def orientation_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
+    """Gradient histograms, channel first (18, N, hc, wc): hard or soft orientation bins
+    (`_orientation_bins`), bilinear spatial cells.
 
     One `np.bincount` (4 entries a pixel: 2 orientation bins x 2 x cells) accumulates straight into the
     channel-first layout the normalisation uses, then `cell` vectorised row passes do the y interpolation.
@@ -85,7 +94,7 @@ def orientation_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     n, h, w = patches.shape
     mag, ang = gradients(patches)
     nb = 2 * N_ORIENT
-    ob0, ob1, od = _orientation_bins(ang)
+    ob0, ob1, od = _orientation_bins(ang, soft)
     m1 = mag * od
     m0 = mag - m1
     hc, wc = h // cell, w // cell
@@ -104,9 +113,9 @@ def orientation_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
     return _pool_rows(hx.reshape(nb * n, h, wc), cell).reshape(nb, n, hc, wc)
 
 
-def cell_histograms(patches: np.ndarray, cell: int) -> np.ndarray:
+def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
     """`orientation_histograms` as (N, hc, wc, 18) (a view)."""
-    return np.moveaxis(orientation_histograms(patches, cell), 0, -1)
+    return np.moveaxis(orientation_histograms(patches, cell, soft), 0, -1)
 
 
 def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
@@ -129,7 +138,7 @@ def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
     return out
 
 
-def fhog(patches: np.ndarray, cell: int = 4) -> np.ndarray:
+def fhog(patches: np.ndarray, cell: int = 4, soft: bool = False) -> np.ndarray:
     """FHOG features of N patches (N, H, W) float32 -> (N, 31, H//cell, W//cell) float32.
 
     Channels: 18 contrast-sensitive, 9 contrast-insensitive orientation channels, each the average of
@@ -139,7 +148,7 @@ def fhog(patches: np.ndarray, cell: int = 4) -> np.ndarray:
     if patches.ndim == 2:
         patches = patches[None]
     patches = np.ascontiguousarray(patches, dtype=np.float32)
-    hist = orientation_histograms(patches, cell)  # (18, n, hc, wc)
+    hist = orientation_histograms(patches, cell, soft)  # (18, n, hc, wc)
     _, n, hc, wc = hist.shape
     both = np.empty((3 * N_ORIENT, n, hc, wc), dtype=np.float32)  # 18 sensitive + 9 insensitive
     both[: 2 * N_ORIENT] = hist

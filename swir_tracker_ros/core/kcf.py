@@ -9,6 +9,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.fft as sfft
 
+from swir_tracker_ros.core.features import FEATURE_KINDS
 from swir_tracker_ros.errors import ParameterError
 
 
@@ -36,7 +37,7 @@ class KCFParams:
     output_sigma_factor: float = field(
         default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0}
     )
-    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": ("hog", "gray")})
+    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": FEATURE_KINDS})
     cell_size: int = field(
         default=4, metadata={"doc": "feature cell in pixels (1 for gray)", "min": 1, "max": 8}
     )
@@ -52,8 +53,8 @@ class KCFParams:
         _check("kernel_sigma", self.kernel_sigma, 0.01, 10.0)
         _check("interp_factor", self.interp_factor, 0.0, 1.0)
         _check("output_sigma_factor", self.output_sigma_factor, 0.01, 1.0)
-        if self.feature not in ("hog", "gray"):
-            raise ParameterError(f"feature={self.feature!r} is not one of ('hog', 'gray')")
+        if self.feature not in FEATURE_KINDS:
+            raise ParameterError(f"feature={self.feature!r} is not one of {FEATURE_KINDS}")
         _check("cell_size", self.cell_size, 1, 8)
 
 
