@@ -40,6 +40,9 @@ def _as_box(box: object) -> Box:
     return Box(x, y, w, h)
 
 
+SIZE_RATES = ("vs", "vw", "vh")  # state entries that change the box size (kalman/models.py names)
+
+
 class Tracker:
     """Single-object tracker; `init(frame, box)` then `update(frame)` once per frame.
 
@@ -78,6 +81,7 @@ class Tracker:
         self._bank: FilterBank | None = None
         self._kf: KalmanFilter | None = None
         self._model = None
+        self._size_rates: list[int] = []
         self._noise: AdaptiveNoise | None = None
         self._box: Box | None = None  # current estimate, conditioned-image pixels
         self._init_size = (0.0, 0.0)
@@ -112,6 +116,7 @@ class Tracker:
         self._box = b
         if p.variant != "cf":
             self._model = kcf_box_model() if p.pipeline == "kcf" else dcfca_box_model(b.w, b.h)
+            self._size_rates = [i for i, n in enumerate(self._model.names) if n in SIZE_RATES]
             if p.variant == "kalman":
                 self._kf = KalmanFilter(self._model)
             else:
@@ -190,6 +195,9 @@ class Tracker:
         shown: tuple[Box, ...] = (wins[len(wins) // 2],)
         if failed:
             mode = SearchMode.MULTI_WINDOW
+            # Re-detection measures no size (it is taken from the prediction), so nothing could correct
+            # a size velocity: hold the size instead of extrapolating it through the whole occlusion.
+            kf.x[self._size_rates] = 0.0
             mid = len(wins) // 2
             # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
             cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)
