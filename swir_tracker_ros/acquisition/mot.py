@@ -23,16 +23,8 @@ from swir_tracker_ros.acquisition.motion import (
 from swir_tracker_ros.acquisition.siamese import SiameseFamily
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman.standard import predict, update
+from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.types import Box
-
-
-def _f(default: float | int | bool, doc: str, lo: float | None = None, hi: float | None = None):
-    meta: dict[str, object] = {"doc": doc}
-    if lo is not None:
-        meta["min"] = lo
-    if hi is not None:
-        meta["max"] = hi
-    return field(default=default, metadata=meta)
 
 
 @dataclass

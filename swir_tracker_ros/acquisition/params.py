@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 
 from swir_tracker_ros.acquisition.detectors import (
     Detector,
@@ -14,17 +14,11 @@ from swir_tracker_ros.acquisition.detectors import (
 )
 from swir_tracker_ros.acquisition.handoff import AutoInitParams
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.paramfield import param as _f
 
 DETECTORS = ("motion", "hog")
 
 
-def _f(default, doc: str, lo=None, hi=None, **extra):
-    meta: dict[str, object] = {"doc": doc, **extra}
-    if lo is not None:
-        meta["min"] = lo
-    if hi is not None:
-        meta["max"] = hi
-    return field(default=default, metadata=meta)
 
 
 @dataclass

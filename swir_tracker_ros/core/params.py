@@ -3,23 +3,15 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.paramfield import param as _f
 
 VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r")
 PIPELINES = ("kcf", "dcf_ca")
 
 
-def _f(default, doc: str, lo=None, hi=None, choices=None):
-    meta: dict = {"doc": doc}
-    if lo is not None:
-        meta["min"] = lo
-    if hi is not None:
-        meta["max"] = hi
-    if choices is not None:
-        meta["choices"] = choices
-    return field(default=default, metadata=meta)
 
 
 @dataclass
