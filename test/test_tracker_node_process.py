@@ -82,14 +82,16 @@ class Probe:
 
     def frame(self, pixels: np.ndarray, big_endian: bool = False) -> float:
         """Publish one frame and wait for its /track/state (lock-step); returns the stamp."""
-        msg = numpy_to_image(pixels, header(self.next_stamp(), "swir"))
-        stamp = stamp_to_seconds(msg.header.stamp)  # the key the collectors compute
-        if big_endian:
-            msg.is_bigendian = 1
-            msg.data = array.array("B", pixels.astype(">u2").tobytes())
-        for _ in range(8):  # best effort: a frame sent while discovery completes may be lost, resend it
+        for _ in range(8):
+            # A frame (or its answer) sent while discovery completes may be lost: send the frame again
+            # with a new stamp, since the node rightly drops a repeated stamp as stale.
+            msg = numpy_to_image(pixels, header(self.next_stamp(), "swir"))
+            stamp = stamp_to_seconds(msg.header.stamp)  # the key the collectors compute
+            if big_endian:
+                msg.is_bigendian = 1
+                msg.data = array.array("B", pixels.astype(">u2").tobytes())
             self.image.publish(msg)
-            if self.spin_until(lambda: stamp in self.states, 1.5):
+            if self.spin_until(lambda s=stamp: s in self.states, 1.5):
                 return stamp
         raise AssertionError(f"no /track/state for frame {stamp}")
 
