@@ -121,3 +121,18 @@ def ros_probe(probe_cls):
         probe.executor.shutdown()
         probe.node.destroy_node()
         rclpy.try_shutdown(context=ctx)
+
+
+class SpinningProbe:
+    """Base of the process tests' probes: `spin_until` drives the probe's own executor."""
+
+    executor: object
+
+    def spin_until(self, predicate, timeout: float) -> bool:
+        """Spin until predicate() is truthy or timeout seconds pass; returns the last predicate value."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if predicate():
+                return True
+            self.executor.spin_once(timeout_sec=0.02)
+        return bool(predicate())

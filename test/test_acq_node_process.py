@@ -7,7 +7,7 @@ import time
 from collections.abc import Iterator
 
 import pytest
-from conftest import REPO, ProcessSet, ros_probe
+from conftest import REPO, ProcessSet, SpinningProbe, ros_probe
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -26,7 +26,7 @@ from swir_tracker_ros.acquisition import crowd
 PARAMS = ["--ros-args", "--params-file", str(REPO / "params" / "acquisition.yaml")]
 
 
-class Probe:
+class Probe(SpinningProbe):
     def __init__(self, ctx: Context) -> None:
         self.node = Node("acquisition_probe", context=ctx)
         self.executor = SingleThreadedExecutor(context=ctx)
@@ -46,14 +46,6 @@ class Probe:
 
     def _on_tracks(self, msg: MarkerArray) -> None:
         self.tracks[stamp_to_seconds(msg.markers[0].header.stamp)] = msg
-
-    def spin_until(self, predicate, timeout: float) -> bool:
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if predicate():
-                return True
-            self.executor.spin_once(timeout_sec=0.02)
-        return bool(predicate())
 
     def frame(self, pixels) -> MarkerArray:
         self.t = max(self.t + 0.04, time.time())

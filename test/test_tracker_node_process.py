@@ -11,7 +11,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from conftest import REPO, ProcessSet, ros_probe
+from conftest import REPO, ProcessSet, SpinningProbe, ros_probe
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.context import Context
@@ -35,7 +35,7 @@ PARAMS = ["--ros-args", "--params-file", str(REPO / "params" / "tracker.yaml"),
           "-p", f"fov_h_deg:={FOV_DEG}", "-p", "diagnostics_period_s:=0.5"]
 
 
-class Probe:
+class Probe(SpinningProbe):
     """A test node: publishes camera frames and side inputs, collects the tracker's outputs by stamp."""
 
     def __init__(self, ctx: Context) -> None:
@@ -63,14 +63,6 @@ class Probe:
         def cb(msg) -> None:
             store[stamp_to_seconds(msg.header.stamp)] = msg
         return cb
-
-    def spin_until(self, predicate, timeout: float) -> bool:
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if predicate():
-                return True
-            self.executor.spin_once(timeout_sec=0.02)
-        return bool(predicate())
 
     def connected(self) -> bool:
         return (self.image.get_subscription_count() > 0 and self.init.get_subscription_count() > 0

@@ -12,7 +12,8 @@ import numpy as np
 from swir_tracker_ros.core.fhog import fhog
 from swir_tracker_ros.types import Box
 
-FEATURE_KINDS = ("hog", "hog_soft", "gray")
+HOG_KINDS = ("hog", "hog_soft")  # FHOG with hard or soft orientation bins
+FEATURE_KINDS = (*HOG_KINDS, "gray")
 
 
 def sample_patch(img: np.ndarray, box: Box, out_w: int, out_h: int) -> np.ndarray:
@@ -49,7 +50,7 @@ def cosine_window(rows: int, cols: int) -> np.ndarray:
 
 def feature_shape(kind: str, patch_h: int, patch_w: int, cell: int) -> tuple[int, int, int]:
     """(channels, rows, cols) of the feature map of a patch."""
-    if kind in ("hog", "hog_soft"):
+    if kind in HOG_KINDS:
         return (31, patch_h // cell, patch_w // cell)
     return (1, patch_h, patch_w)
 
@@ -60,7 +61,7 @@ def unwindowed_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray
     `hog`: 31-channel FHOG with `cell`-pixel cells, hard orientation bins; `hog_soft`: the same with
     soft orientation bins; `gray`: the intensity minus 0.5 (KCF raw pixels).
     """
-    if kind in ("hog", "hog_soft"):
+    if kind in HOG_KINDS:
         return fhog(patches, cell, soft=kind == "hog_soft")
     if kind == "gray":
         return (patches - np.float32(0.5))[:, None, :, :]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+from swir_tracker_ros.core.features import FEATURE_KINDS
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param as _f
 
@@ -38,7 +39,7 @@ class TrackerParams:
         "filter features: 31-channel FHOG (cell 4) with soft orientation bins as in Piotr's fhog "
         "(hog_soft, default: better on the real sequences), with hard nearest bins (hog: better on the "
         "synthetic occlusion scenarios; docs/tracking_core.md), or raw gray (cell 1)",
-        choices=("hog", "hog_soft", "gray"),
+        choices=FEATURE_KINDS,
     )
     cell_size: int = _f(4, "FHOG cell size in pixels (gray features always use 1)", 1, 8)
     kcf_padding: float = _f(1.5, "KCF search window = (1 + padding) x target (paper 000: 2.5x)", 0.5, 4.0)
