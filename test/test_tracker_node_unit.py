@@ -24,6 +24,7 @@ from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.nodes.graph import reported_publishers
 from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode, params_yaml
 from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
 from swir_tracker_ros.tracker import TrackerParams
@@ -201,6 +202,15 @@ def test_diagnostics_report(context: Context) -> None:
         values = status_values(cap.diag[-1], DIAG_NAME)
         assert values["window_processed"] == "6" and float(values["latency_ms_p50"]) > 0
         assert values["state"] == "tracking"
+        # Which inputs have a publisher: the supervisor of the demo waits for these before it starts.
+        assert values["publishers /camera/image_raw"] == "0"
+        node.create_publisher(Image, node.params.image_topic, 1)
+        node._publish_diagnostics()
+        values = status_values(cap.diag[-1], DIAG_NAME)
+        assert values["publishers /camera/image_raw"] == "1"
+        assert reported_publishers(values, "/camera/image_raw") == 1
+        assert reported_publishers(values, "/positioner/joint_states") == 0
+        assert reported_publishers({"publishers /x": "?"}, "/x") == 0
     finally:
         node.destroy_node()
 

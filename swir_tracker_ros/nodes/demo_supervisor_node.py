@@ -26,7 +26,20 @@ from msg_adapters.stamps import stamp_to_seconds
 from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros.demo.recording import RECORDED_TOPICS, BagRecorder, RunRecords
 from swir_tracker_ros.demo.video import VideoSink, caption
+from swir_tracker_ros.nodes.graph import reported_publishers
 from swir_tracker_ros.nodes.scene_camera_node import GROUND_TRUTH_STATE, ground_truth_state_values
+
+# Before the track is initialised every process must have discovered the publishers of its inputs (as it
+# reports on /diagnostics): the supervisor's own view of the graph says nothing about whether, say, the
+# bridge has found the tracker's error stream yet, and DDS discovery between two processes can lag the
+# others by seconds (the head then stood still for the first 2.4 s of a run).
+WIRING = (
+    ("swir_tracker/positioner", "/track/pan_tilt_error"),
+    ("swir_tracker/positioner", "/track/state"),
+    ("swir_tracker/tracker_node", "/camera/image_raw"),
+    ("swir_tracker/tracker_node", "/positioner/joint_states"),
+    ("swir_tracker/scene_camera", "/positioner/joint_states"),
+)
 
 # Every publisher in the demo graph is reliable (scene_camera's images too), so nothing is lost to the
 # fragmentation of large images over best-effort transport.
@@ -75,6 +88,7 @@ class DemoSupervisor(Node):
         self.latest_state = ""
         self.latest_state_stamp = -1.0
         self.joints_seen = False
+        self.reports: dict[str, dict[str, str]] = {}  # /diagnostics status name -> its latest values
         self.last_init_pub = 0.0
         self.start_future = None
         self.scene_t = 0.0
@@ -152,8 +166,9 @@ class DemoSupervisor(Node):
                                "cx": intr.cx, "cy": intr.cy}
         elif topic == "/diagnostics":
             for status in msg.status:
-                self.rec.diagnostics.append({"recv": now, "name": status.name,
-                                             "values": {kv.key: kv.value for kv in status.values}})
+                values = {kv.key: kv.value for kv in status.values}
+                self.rec.diagnostics.append({"recv": now, "name": status.name, "values": values})
+                self.reports[status.name] = values
 
     def _on_debug(self, data: bytes) -> None:
         if self.video is None or self.phase not in ("init", "start", "run"):
@@ -181,6 +196,11 @@ class DemoSupervisor(Node):
             cv2.imwrite(str(self.out / f"frame_{t:05.2f}s.png"), frame)
 
     # ---------------------------------------------------------------- phases
+    def unwired(self) -> list[str]:
+        """The `WIRING` links not reported yet, as 'status name <- topic'."""
+        return [f"{name} <- {topic}" for name, topic in WIRING
+                if reported_publishers(self.reports.get(name, {}), topic) < 1]
+
     def _set_phase(self, phase: str) -> None:
         self.get_logger().info(f"phase {self.phase} -> {phase}")
         self.phase, self.phase_since = phase, time.time()
@@ -195,16 +215,19 @@ class DemoSupervisor(Node):
         now = time.time()
         waited = now - self.phase_since
         if self.phase == "wait_graph":
-            ready = (self.latest_gt is not None and self.joints_seen
+            missing = self.unwired()
+            ready = (self.latest_gt is not None and self.joints_seen and not missing
                      and self.init_pub.get_subscription_count() > 0 and self.start_client.service_is_ready())
             if ready:
+                self.get_logger().info(f"graph wired after {waited:.1f} s")
                 self._set_phase("init")
             elif waited > self.args.startup_timeout:
                 have_gt = self.latest_gt is not None
                 self._fail(f"graph not ready after {waited:.0f} s: ground truth {have_gt}, "
                            f"joint states {self.joints_seen}, tracker listening on /track/init "
                            f"{self.init_pub.get_subscription_count() > 0}, /scene/start "
-                           f"{self.start_client.service_is_ready()}")
+                           f"{self.start_client.service_is_ready()}, inputs without a discovered publisher "
+                           f"{missing or 'none'}")
         elif self.phase == "init":
             tracking = self.latest_state in ("tracking", "occluded")
             if tracking and self.latest_state_stamp >= self.rec.init_time:

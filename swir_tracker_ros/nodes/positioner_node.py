@@ -18,6 +18,7 @@ from msg_adapters.geometry import pan_tilt_error_from_msg
 from msg_adapters.joint_state import PanTiltSample, pan_tilt_to_joint_state
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros.nodes.graph import input_publishers
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.pelco.bridge import PositionerBridge
@@ -96,7 +97,8 @@ class PositionerNode(Node):
     def _publish_diagnostics(self) -> None:
         b = self.bridge
         values = dict(b.stats(), bad_messages=self._bad_messages,
-                      feedback="true" if b.pose() is not None else "false")
+                      feedback="true" if b.pose() is not None else "false",
+                      **input_publishers(self, (ERROR_TOPIC, STATE_TOPIC)))
         if not b.link.connected:
             level, text = diagnostics.ERROR, f"port {self.params.port} unavailable, retrying"
         elif b.pose() is None and self.params.feedback_rate > 0:

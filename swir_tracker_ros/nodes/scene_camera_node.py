@@ -16,6 +16,7 @@ from sensor_msgs.msg import CameraInfo, Image, JointState
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 
+from msg_adapters import diagnostics
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_polygon
 from msg_adapters.image import numpy_to_image
@@ -23,6 +24,7 @@ from msg_adapters.joint_state import joint_state_to_sample
 from msg_adapters.stamps import header as make_header
 from swir_tracker_ros.demo.world import SceneClock, build_scene, scene_names
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.nodes.graph import input_publishers
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.scene.camera import CameraView
@@ -31,6 +33,8 @@ from swir_tracker_ros.scene.world import Truth
 CAMERA_QOS = QoSProfile(depth=2, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 GROUND_TRUTH_STATE = "/ground_truth/state"
 GROUND_TRUTH_STATUS = "swir_tracker/ground_truth"
+STATUS_NAME = "swir_tracker/scene_camera"
+JOINT_STATES_TOPIC = "/positioner/joint_states"
 GT_KEYS = ("scene_time", "in_view", "visible", "occlusion", "occluded", "pan_error", "tilt_error",
            "head_pan", "head_tilt", "running")
 
@@ -142,9 +146,11 @@ class SceneCameraNode(Node):
         self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", CAMERA_QOS)
         self.gt_pub = self.create_publisher(PolygonStamped, "/ground_truth/box", QoSProfile(depth=10))
         self.gt_state_pub = self.create_publisher(DiagnosticArray, GROUND_TRUTH_STATE, QoSProfile(depth=10))
-        self.create_subscription(JointState, "/positioner/joint_states", self._on_joints, 10)
+        self.create_subscription(JointState, JOINT_STATES_TOPIC, self._on_joints, 10)
+        self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_service(Trigger, "/scene/start", self._on_start)
         self.timer = self.create_timer(1.0 / p.fps, self._tick)
+        self.create_timer(1.0, self._publish_diagnostics)
         self.get_logger().info(
             f"scene {p.scene!r} seed {p.seed}: {p.width}x{p.height} {p.bits}-bit at {p.fps:g} Hz, "
             f"hfov {p.hfov_deg:g} deg, {duration:g} s, "
@@ -159,6 +165,22 @@ class SceneCameraNode(Node):
         now = time.time()
         measured = s.stamp if 0.0 < s.stamp <= now else now  # the bridge stamps the measurement time
         self.pose = (s.pan, s.tilt, s.pan_velocity, s.tilt_velocity, measured)
+
+    def _publish_diagnostics(self) -> None:
+        """1 Hz health: frames so far, scene clock, whether head poses arrive (else: last pose held)."""
+        if not self.context.ok():
+            return
+        now = time.time()
+        age = now - self.pose[4]
+        values = {"frames": self.frames, "scene_time": self.clock.time(now), "running": self.clock.running,
+                  "head_pose_age_s": age if math.isfinite(age) else "never",
+                  **input_publishers(self, (JOINT_STATES_TOPIC,))}
+        if math.isfinite(age) and age <= 1.0:
+            level, text = diagnostics.OK, "rendering at the head pose"
+        else:
+            level, text = diagnostics.WARN, f"no {JOINT_STATES_TOPIC} for 1 s: last known pose held"
+        st = diagnostics.status(STATUS_NAME, level, text, values, hardware_id="scene_camera")
+        self.diag_pub.publish(diagnostics.diagnostic_array(make_header(now, self.p.frame_id), [st]))
 
     def _on_start(self, _req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
         started = self.clock.start(time.time())

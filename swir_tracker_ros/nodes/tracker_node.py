@@ -27,6 +27,7 @@ from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.stamps import stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
 from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.nodes.graph import input_publishers
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
@@ -273,7 +274,9 @@ class TrackerNode(Node):
             level, text = OK, "ok"
         state = self.last_result.state.value if self.last_result else TrackState.IDLE.value
         values = {"state": state, "intrinsics": "camera_info" if self.params.use_camera_info and
-                  self.camera_intr is not None else "fov", **values}
+                  self.camera_intr is not None else "fov", **values,
+                  **input_publishers(self, (self.params.image_topic, self.params.camera_info_topic,
+                                            self.params.joint_states_topic))}
         header = Header(stamp=self.get_clock().now().to_msg())
         self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values, NODE_NAME)]))
 
