@@ -1,12 +1,14 @@
 # SPDX-License-Identifier: Apache-2.0
-"""sensor_msgs/CameraInfo -> pinhole intrinsics, and the field-of-view fallback used without one."""
+"""sensor_msgs/CameraInfo <-> pinhole intrinsics, and the field-of-view fallback used without one."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
-from sensor_msgs.msg import CameraInfo
+from sensor_msgs.msg import CameraInfo, RegionOfInterest
+from std_msgs.msg import Header
 
 from msg_adapters.errors import MessageError
 
@@ -79,3 +81,40 @@ def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
     if not (fx_out > 0 and fy_out > 0):  # a denormal focal length underflows to zero once binned
         raise MessageError(f"CameraInfo.k focal lengths vanish after binning {bx}x{by}: fx={fx}, fy={fy}")
     return Intrinsics(fx_out, fy_out, cx / bx, cy / by, out_w, out_h)
+
+
+def camera_info_from_intrinsics(intr: Intrinsics, header: Header | None = None, *,
+                                binning: tuple[int, int] = (1, 1), roi_offset: tuple[int, int] = (0, 0),
+                                sensor_size: tuple[int, int] | None = None,
+                                distortion_model: str = "plumb_bob",
+                                d: Sequence[float] = (0.0,) * 5) -> CameraInfo:
+    """The CameraInfo of an image with intrinsics `intr`: the inverse of `intrinsics_from_camera_info`.
+
+    REP-104: the message describes the full sensor (`sensor_size`, default: exactly the ROI) with
+    K = [fx bx, 0, cx bx + x0; 0, fy by, cy by + y0; 0, 0, 1], the image being the ROI at `roi_offset`
+    (x0, y0) of `intr.width * bx` x `intr.height * by` sensor pixels, binned `binning` = (bx, by).
+    A ROI covering the whole sensor is written as the all-zero ROI, no binning as binning 0.
+    R = I and P = [K | 0] (a monocular camera whose images need no rectification); `d` is copied.
+    Raises `MessageError` for invalid intrinsics, binning < 1, a negative offset or a ROI off the sensor.
+    """
+    bx, by = (int(b) for b in binning)
+    x0, y0 = (int(o) for o in roi_offset)
+    if bx < 1 or by < 1 or x0 < 0 or y0 < 0:
+        raise MessageError(f"binning must be >= 1 and the ROI offset >= 0, got {binning} and {roi_offset}")
+    finite = all(math.isfinite(v) for v in (intr.fx, intr.fy, intr.cx, intr.cy))
+    if not (finite and intr.fx > 0 and intr.fy > 0 and intr.width > 0 and intr.height > 0):
+        raise MessageError(f"intrinsics are invalid: {intr}")
+    roi_w, roi_h = int(intr.width) * bx, int(intr.height) * by
+    full_w, full_h = (int(v) for v in sensor_size) if sensor_size is not None else (x0 + roi_w, y0 + roi_h)
+    if x0 + roi_w > full_w or y0 + roi_h > full_h:
+        raise MessageError(f"ROI {roi_w}x{roi_h} at ({x0}, {y0}) exceeds the {full_w}x{full_h} sensor")
+    roi = RegionOfInterest()  # all zero: the whole sensor
+    if (x0, y0, roi_w, roi_h) != (0, 0, full_w, full_h):
+        roi = RegionOfInterest(x_offset=x0, y_offset=y0, width=roi_w, height=roi_h)
+    fx, fy, cx, cy = intr.fx * bx, intr.fy * by, intr.cx * bx + x0, intr.cy * by + y0
+    return CameraInfo(header=header if header is not None else Header(), width=full_w, height=full_h,
+                      distortion_model=distortion_model, d=[float(v) for v in d],
+                      k=[fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0],
+                      r=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+                      p=[fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0],
+                      binning_x=bx if bx > 1 else 0, binning_y=by if by > 1 else 0, roi=roi)

@@ -84,23 +84,30 @@ def test_build_scene_accepts_harness_scenarios_and_refuses_unknown_names() -> No
 
 def test_ground_truth_state_round_trip_and_camera_info() -> None:
     from msg_adapters.camera_info import intrinsics_from_camera_info
+    from msg_adapters.errors import MessageError
+    from msg_adapters.ground_truth import ground_truth_state_msg, ground_truth_state_values
     from msg_adapters.stamps import header
-    from swir_tracker_ros.nodes.scene_camera_node import (
-        camera_info_msg,
-        ground_truth_state_msg,
-        ground_truth_state_values,
-    )
+    from swir_tracker_ros.nodes.scene_camera_node import camera_info_msg, ground_truth_values
 
     scene = build_scene("demo", seed=7)
     view = CameraView(0.01, -0.005, 8.0, 576, 504)
     truth = target_truth(scene, 1.0, view)
-    values = ground_truth_state_values(ground_truth_state_msg(header(12.5), 1.0, truth, view, True))
+    values = ground_truth_state_values(ground_truth_state_msg(header(12.5), ground_truth_values(
+        1.0, truth, view, True)))
     assert values["scene_time"] == 1.0 and values["in_view"] == 1.0 and values["running"] == 1.0
     assert values["pan_error"] == pytest.approx(truth.azimuth - 0.01)
     assert values["tilt_error"] == pytest.approx(truth.elevation + 0.005)
     assert values["head_pan"] == pytest.approx(0.01)
-    absent = ground_truth_state_values(ground_truth_state_msg(header(1.0), 0.0, None, view, False))
+    absent = ground_truth_state_values(ground_truth_state_msg(header(1.0), ground_truth_values(
+        0.0, None, view, False)))
     assert absent["in_view"] == 0.0 and math.isnan(absent["pan_error"])
+    assert values["pan_error"] == truth.azimuth - 0.01  # repr() text: the angle survives bit for bit
+    with pytest.raises(MessageError, match="needs values"):
+        ground_truth_state_msg(header(1.0), {"scene_time": 1.0})
+    broken = ground_truth_state_msg(header(1.0), ground_truth_values(0.0, None, view, False))
+    broken.status[0].values[0].value = "nan"  # scene_time
+    with pytest.raises(MessageError, match="not finite"):
+        ground_truth_state_values(broken)
     intr = intrinsics_from_camera_info(camera_info_msg(view, header(1.0)))
     assert (intr.fx, intr.cx, intr.cy, intr.width) == pytest.approx((view.fx, 288.0, 252.0, 576))
 
@@ -116,8 +123,8 @@ def test_scene_camera_process_renders_at_the_head_pose(processes) -> None:
     from std_srvs.srv import Trigger
 
     from msg_adapters.geometry import box_from_polygon
+    from msg_adapters.ground_truth import ground_truth_state_values
     from msg_adapters.joint_state import PanTiltSample, pan_tilt_to_joint_state
-    from swir_tracker_ros.nodes.scene_camera_node import ground_truth_state_values
 
     proc = processes.start("scene_camera", "--ros-args", "-p", "autostart:=false", "-p", "extrapolate_s:=0.0")
     ctx = rclpy.Context()

@@ -21,13 +21,14 @@ from std_srvs.srv import Trigger
 from msg_adapters.camera_info import intrinsics_from_camera_info
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_from_polygon, box_to_roi, pan_tilt_error_from_msg
+from msg_adapters.ground_truth import ground_truth_state_values
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.stamps import stamp_to_seconds
 from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros.demo.recording import RECORDED_TOPICS, BagRecorder, RunRecords
 from swir_tracker_ros.demo.video import VideoSink, caption
 from swir_tracker_ros.nodes.graph import reported_publishers
-from swir_tracker_ros.nodes.scene_camera_node import GROUND_TRUTH_STATE, ground_truth_state_values
+from swir_tracker_ros.nodes.scene_camera_node import GROUND_TRUTH_STATE
 
 # Before the track is initialised every process must have discovered the publishers of its inputs (as it
 # reports on /diagnostics): the supervisor's own view of the graph says nothing about whether, say, the

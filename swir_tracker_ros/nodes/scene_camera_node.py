@@ -8,7 +8,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -17,8 +17,10 @@ from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 
 from msg_adapters import diagnostics
+from msg_adapters.camera_info import Intrinsics, camera_info_from_intrinsics
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_polygon
+from msg_adapters.ground_truth import ground_truth_state_msg
 from msg_adapters.image import numpy_to_image
 from msg_adapters.joint_state import joint_state_to_sample
 from msg_adapters.stamps import header as make_header
@@ -32,11 +34,8 @@ from swir_tracker_ros.scene.world import Truth
 
 CAMERA_QOS = QoSProfile(depth=2, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 GROUND_TRUTH_STATE = "/ground_truth/state"
-GROUND_TRUTH_STATUS = "swir_tracker/ground_truth"
 STATUS_NAME = "swir_tracker/scene_camera"
 JOINT_STATES_TOPIC = "/positioner/joint_states"
-GT_KEYS = ("scene_time", "in_view", "visible", "occlusion", "occluded", "pan_error", "tilt_error",
-           "head_pan", "head_tilt", "running")
 
 
 @dataclass
@@ -78,16 +77,16 @@ class SceneCameraParams:
         return self
 
 
-def ground_truth_state_msg(header: Header, scene_time: float, truth: Truth | None, view: CameraView,
-                           running: bool) -> DiagnosticArray:
-    """/ground_truth/state: one `swir_tracker/ground_truth` status with the values of `GT_KEYS`.
+def ground_truth_values(scene_time: float, truth: Truth | None, view: CameraView,
+                        running: bool) -> dict[str, float]:
+    """One frame's /ground_truth/state values (`msg_adapters.ground_truth.GT_KEYS`).
 
     pan_error / tilt_error are the exact angles of the target's centre from the optical axis in the
     convention of /track/pan_tilt_error (azimuth - pan, elevation - tilt; NaN when the target is not
-    in view), head_pan / head_tilt the pose this frame was rendered at (rad).
+    in the scene), head_pan / head_tilt the pose this frame was rendered at (rad).
     """
     in_view = truth is not None and truth.in_view
-    values = {
+    return {
         "scene_time": scene_time,
         "in_view": 1.0 if in_view else 0.0,
         "visible": truth.visible_fraction if in_view else 0.0,
@@ -99,33 +98,12 @@ def ground_truth_state_msg(header: Header, scene_time: float, truth: Truth | Non
         "head_tilt": view.tilt,
         "running": 1.0 if running else 0.0,
     }
-    status = DiagnosticStatus(level=DiagnosticStatus.OK, name=GROUND_TRUTH_STATUS,
-                              message="in view" if in_view else "absent", hardware_id="scene_camera",
-                              values=[KeyValue(key=k, value=repr(float(values[k]))) for k in GT_KEYS])
-    return DiagnosticArray(header=header, status=[status])
-
-
-def ground_truth_state_values(msg: DiagnosticArray) -> dict[str, float] | None:
-    """The `GT_KEYS` values of a /ground_truth/state message; None when it has no ground-truth status."""
-    for status in msg.status:
-        if status.name == GROUND_TRUTH_STATUS:
-            raw = {kv.key: kv.value for kv in status.values}
-            try:
-                return {k: float(raw[k]) for k in GT_KEYS}
-            except (KeyError, ValueError) as exc:
-                raise MessageError(f"{GROUND_TRUTH_STATUS} values are incomplete or not numbers ({exc})"
-                                   ) from exc
-    return None
 
 
 def camera_info_msg(view: CameraView, header: Header) -> CameraInfo:
     """CameraInfo of the ideal pinhole view: K from the FOV, zero distortion, P = [K | 0]."""
-    info = view.camera_info()
-    k = [float(v) for v in info["k"]]
-    return CameraInfo(header=header, width=view.width, height=view.height,
-                      distortion_model=str(info["distortion_model"]), d=[float(v) for v in info["d"]], k=k,
-                      r=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-                      p=[k[0], 0.0, k[2], 0.0, 0.0, k[4], k[5], 0.0, 0.0, 0.0, 1.0, 0.0])
+    intr = Intrinsics(view.fx, view.fy, view.cx, view.cy, view.width, view.height)
+    return camera_info_from_intrinsics(intr, header)
 
 
 class SceneCameraNode(Node):
@@ -215,7 +193,8 @@ class SceneCameraNode(Node):
         self.info_pub.publish(camera_info_msg(view, hdr))
         in_view = target is not None and target.in_view
         self.gt_pub.publish(box_to_polygon(target.box if in_view else None, hdr))
-        self.gt_state_pub.publish(ground_truth_state_msg(hdr, t, target, view, self.clock.running))
+        self.gt_state_pub.publish(ground_truth_state_msg(
+            hdr, ground_truth_values(t, target, view, self.clock.running), hardware_id="scene_camera"))
         self.frames += 1
 
 
