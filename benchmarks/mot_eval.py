@@ -72,10 +72,9 @@ def tud_frames(seq: Path = TUD) -> Iterator[Frame]:
 
 
 def crowd_frames(scene: crowd.CrowdScene, frames: int, min_visibility: float = 0.25) -> Iterator[Frame]:
-    bg = crowd.background(scene)
     for k in range(frames):
-        img, gts = crowd.render(scene, k, bg)
-        yield img, [(g.id, g.box) for g in gts if g.visibility >= min_visibility]
+        img, gts = crowd.render(scene, k)
+        yield img, [(g.id, g.box) for g in gts if g.visible_fraction >= min_visibility]
 
 
 class SimulatedDetector:
@@ -88,10 +87,9 @@ class SimulatedDetector:
     def reset(self) -> None:
         self.k = 0
         self.rng = np.random.default_rng(self.seed)
-        self.bg = crowd.background(self.scene)
 
     def detect(self, frame: np.ndarray, ego_shift: tuple[float, float] = (0.0, 0.0)) -> list[Detection]:
-        _, gts = crowd.render(self.scene, self.k, self.bg)
+        _, gts = crowd.render(self.scene, self.k)
         self.k += 1
         return crowd.simulated_detections(gts, self.rng, size=(self.scene.width, self.scene.height))
 

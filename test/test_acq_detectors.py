@@ -16,13 +16,11 @@ from swir_tracker_ros.types import Box
 
 
 def test_motion_detector_finds_walkers_and_ignores_the_static_scene() -> None:
-    scene = crowd.occlusion_scene(3)
-    scene.occluders.clear()
-    bg = crowd.background(scene)
+    scene = crowd.occlusion_scene(3, occluder=False)
     det = MotionDetector()
     hits = []
     for k in range(30):
-        img, gts = crowd.render(scene, k, bg)
+        img, gts = crowd.render(scene, k)
         boxes = [d.box for d in det.detect(img)]
         if k >= 10:
             hits.append(max((b.iou(gts[0].box) for b in boxes), default=0.0))

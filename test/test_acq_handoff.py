@@ -47,12 +47,11 @@ def test_auto_does_not_confirm_jumping_boxes_and_restarts_after_the_window() -> 
 
 def test_lost_candidates_rank_the_same_identity_first() -> None:
     scene = crowd.random_crowd(5, n=4)
-    bg = crowd.background(scene)
-    img0, gts0 = crowd.render(scene, 0, bg)
-    target = max(gts0, key=lambda g: g.visibility * g.box.h)
+    img0, gts0 = crowd.render(scene, 0)
+    target = max(gts0, key=lambda g: g.visible_fraction * g.box.h)
     target_app = describe(img0, target.box)
-    img, gts = crowd.render(scene, 30, bg)
-    views = [TrackView(10 + g.id, g.box, describe(img, g.box)) for g in gts if g.visibility > 0.8]
+    img, gts = crowd.render(scene, 30)
+    views = [TrackView(10 + g.id, g.box, describe(img, g.box)) for g in gts if g.visible_fraction > 0.8]
     assert any(v.id == 10 + target.id for v in views)
     ranked = lost_candidates(target_app, views, CostWeights(use_siamese=False), k=2)
     assert len(ranked) == 2 and ranked[0][1] <= ranked[1][1]

@@ -75,13 +75,11 @@ def test_select_publishes_the_track_box_on_track_init(processes: ProcessSet, pro
     ok = probe.spin_until(lambda: probe.image.get_subscription_count() > 0
                           and probe.select.get_subscription_count() > 0, 30.0)
     assert ok, processes.log(proc)
-    scene = crowd.occlusion_scene(2)
-    scene.occluders.clear()
-    scene.walkers[0].start = (-30.0, 400.0)  # walks in: no ghost of a frame-0 pedestrian in the background
-    bg = crowd.background(scene)
+    # Walks in from the left: no ghost of a frame-0 pedestrian in the background model.
+    scene = crowd.occlusion_scene(2, occluder=False, start_u=-30.0)
     tracks = []
     for k in range(40):
-        tracks = tracks_from_markers(probe.frame(crowd.render(scene, k, bg)[0]))
+        tracks = tracks_from_markers(probe.frame(crowd.render(scene, k)[0]))
         if tracks and k > 25:
             break
     assert len(tracks) == 1, processes.log(proc)
@@ -95,7 +93,7 @@ def test_select_publishes_the_track_box_on_track_init(processes: ProcessSet, pro
     probe.spin_until(lambda: False, 0.3)
     k0 = k
     for k in range(k0 + 1, k0 + 4):
-        probe.frame(crowd.render(scene, k, bg)[0])
+        probe.frame(crowd.render(scene, k)[0])
     assert probe.spin_until(lambda: probe.candidates, 5.0), processes.log(proc)
     offered = tracks_from_markers(probe.candidates[-1], CANDIDATES_NS)
     assert offered and offered[0].id == chosen.id

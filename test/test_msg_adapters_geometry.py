@@ -13,7 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from sensor_msgs.msg import CameraInfo, RegionOfInterest
 
-from msg_adapters.camera_info import Intrinsics, intrinsics_from_camera_info, intrinsics_from_fov
+from msg_adapters.camera_info import (
+    Intrinsics,
+    camera_info_from_intrinsics,
+    intrinsics_from_camera_info,
+    intrinsics_from_fov,
+)
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import (
     box_from_polygon,
@@ -108,6 +113,47 @@ def test_camera_info_with_binning_and_roi() -> None:
     assert intr.scaled_to(320, 256).fx == 400
     with pytest.raises(MessageError, match="uncalibrated"):
         intrinsics_from_camera_info(CameraInfo(width=640, height=512))
+
+
+def test_camera_info_builder_inverts_the_parser_with_binning_and_roi() -> None:
+    image = Intrinsics(800.0, 805.0, 300.25, 250.5, 640, 512)
+    plain = camera_info_from_intrinsics(image, header(2.0), d=[0.1, -0.01, 0.0, 0.0, 0.002])
+    assert (plain.width, plain.height, plain.binning_x, plain.roi.width) == (640, 512, 0, 0)
+    assert list(plain.k) == [800.0, 0.0, 300.25, 0.0, 805.0, 250.5, 0.0, 0.0, 1.0]
+    assert list(plain.p) == [800.0, 0.0, 300.25, 0.0, 0.0, 805.0, 250.5, 0.0, 0.0, 0.0, 1.0, 0.0]
+    assert list(plain.d) == [0.1, -0.01, 0.0, 0.0, 0.002] and plain.distortion_model == "plumb_bob"
+    assert stamp_to_seconds(plain.header.stamp) == 2.0
+    assert intrinsics_from_camera_info(plain) == image
+    # A 2x2-binned 640x512 window at (100, 40) of a 1920x1200 sensor: K and the ROI are in sensor pixels.
+    cut = camera_info_from_intrinsics(image, binning=(2, 2), roi_offset=(100, 40), sensor_size=(1920, 1200))
+    assert (cut.width, cut.height, cut.binning_x, cut.binning_y) == (1920, 1200, 2, 2)
+    assert (cut.roi.x_offset, cut.roi.y_offset, cut.roi.width, cut.roi.height) == (100, 40, 1280, 1024)
+    assert list(cut.k) == [1600.0, 0.0, 700.5, 0.0, 1610.0, 541.0, 0.0, 0.0, 1.0]
+    assert intrinsics_from_camera_info(cut) == image
+    # The other way round: a binned, windowed message parsed and rebuilt gives the same calibration.
+    msg = CameraInfo(width=1280, height=1024, k=[1600.0, 0.0, 640.0, 0.0, 1610.0, 512.0, 0.0, 0.0, 1.0],
+                     binning_x=2, binning_y=2)
+    msg.roi = RegionOfInterest(x_offset=64, y_offset=32, width=1024, height=960)
+    again = camera_info_from_intrinsics(intrinsics_from_camera_info(msg), binning=(2, 2), roi_offset=(64, 32),
+                                        sensor_size=(1280, 1024))
+    assert list(again.k) == list(msg.k) and again.roi == msg.roi
+    for bad in ({"binning": (0, 1)}, {"roi_offset": (-1, 0)}, {"sensor_size": (639, 512)}):
+        with pytest.raises(MessageError):
+            camera_info_from_intrinsics(image, **bad)
+    with pytest.raises(MessageError, match="intrinsics are invalid"):
+        camera_info_from_intrinsics(Intrinsics(0.0, 805.0, 320.0, 256.0, 640, 512))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(1.0, 1e5), st.floats(1.0, 1e5), st.floats(-1e4, 1e4), st.floats(-1e4, 1e4),
+       st.integers(1, 4000), st.integers(1, 4000), st.integers(1, 8), st.integers(1, 8), st.integers(0, 3000),
+       st.integers(0, 3000))
+def test_camera_info_round_trip(fx, fy, cx, cy, w, h, bx, by, x0, y0) -> None:
+    intr = Intrinsics(fx, fy, cx, cy, w, h)
+    msg = camera_info_from_intrinsics(intr, binning=(bx, by), roi_offset=(x0, y0))
+    back = intrinsics_from_camera_info(msg)
+    assert (back.width, back.height) == (w, h)
+    assert (back.fx, back.fy, back.cx, back.cy) == pytest.approx((fx, fy, cx, cy), rel=1e-12, abs=1e-9)
 
 
 def test_track_state_round_trip() -> None:

@@ -18,6 +18,7 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
 from std_srvs.srv import Trigger
 
+from msg_adapters.camera_info import Intrinsics, camera_info_from_intrinsics
 from msg_adapters.diagnostics import status_values
 from msg_adapters.geometry import box_from_polygon, pan_tilt_error_from_msg
 from msg_adapters.image import numpy_to_image
@@ -153,8 +154,7 @@ def test_resolution_change_reinitialises_on_the_scaled_box(context: Context) -> 
 def test_ego_shift_from_joint_states_and_camera_info(context: Context) -> None:
     node, _ = make(context)
     try:
-        k = [500.0, 0.0, 120.0, 0.0, 500.0, 96.0, 0.0, 0.0, 1.0]
-        node._on_camera_info(CameraInfo(width=W, height=H, k=k))
+        node._on_camera_info(camera_info_from_intrinsics(Intrinsics(500.0, 500.0, 120.0, 96.0, W, H)))
         node._on_camera_info(CameraInfo(width=W, height=H))  # uncalibrated: ignored, previous one kept
         for t, pan, tilt in ((0.9, 0.0, 0.0), (1.1, 0.02, -0.01)):
             node._on_joint_state(JointState(header=header(t), name=["tilt", "pan"], position=[tilt, pan]))

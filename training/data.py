@@ -7,8 +7,8 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from crowd_sprites import background, make_identity, render_sprite
 
-from swir_tracker_ros.acquisition.crowd import CrowdScene, background, make_identity, render_sprite
 from swir_tracker_ros.acquisition.siamese import INPUT_SIZE, crop_resized
 from swir_tracker_ros.types import Box
 
@@ -55,9 +55,9 @@ def sequence_crops(seq_dir: Path, step: int = 4) -> dict[str, list[np.ndarray]]:
 
 
 def synthetic_crops(n_ids: int, per_id: int, seed: int) -> dict[str, list[np.ndarray]]:
-    """Rendered pedestrians (crowd.py identities) at random sizes, phases and backgrounds, with noise."""
+    """Rendered pedestrians (crowd_sprites) at random sizes, phases and backgrounds, with noise."""
     rng = np.random.default_rng(seed)
-    bg = background(CrowdScene(seed=seed))
+    bg = background(seed)
     out: dict[str, list[np.ndarray]] = {}
     for i in range(n_ids):
         ident = make_identity(i, rng)

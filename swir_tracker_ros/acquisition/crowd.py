@@ -1,170 +1,108 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Synthetic thermal crowds with identity ground truth: textured warm pedestrians crossing and occluding."""
+"""Synthetic thermal crowds with identity ground truth, rendered by the scene package (`scene/`).
+
+Warm pedestrians (`scene.actors.Pedestrian`, per-identity `Look` and texture, gait animation) and poles walk
+on the ground plane in front of a static camera; `scene.world.World` paints them far to near, gives every
+identity its exact box and visible fraction, and applies an 8-bit `SensorModel`. The scenes are staged in
+image terms (columns, pixels per frame) because the acquisition tests reason in frames; `_ground_x` turns
+an image column at a range into the lateral ground position.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass
+from functools import cached_property
 
-import cv2
 import numpy as np
 
 from swir_tracker_ros.acquisition.association import Detection
+from swir_tracker_ros.scene.actors import Leg, Path, Pedestrian, StaticOccluder, pole
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.sensor import SensorModel
+from swir_tracker_ros.scene.texture import Look, make_panorama
+from swir_tracker_ros.scene.world import Truth, World
 from swir_tracker_ros.types import Box
 
-
-@dataclass(frozen=True)
-class Identity:
-    """Per-identity thermal signature: temperatures (8-bit gray) of head, torso, legs and a fixed texture."""
-
-    id: int
-    head: float
-    torso: float
-    legs: float
-    texture: np.ndarray  # (8, 4) pattern in [-1, 1], upsampled over the body
-    texture_gain: float
-    aspect: float  # width / height
-
-
-@dataclass
-class Walker:
-    """A pedestrian on a straight path: position of the foot point at frame k = start + k * velocity."""
-
-    identity: Identity
-    start: tuple[float, float]  # foot point (x, y) at frame 0
-    velocity: tuple[float, float]  # px per frame
-    height: float  # px at frame 0
-    growth: float = 0.0  # height change per frame (approach / recede)
-    depth: float = 0.0  # draw order: larger is nearer (drawn later)
-    turn_at: int | None = None  # frame after which the walker turns back (velocity reversed)
-
-    def box(self, k: int) -> Box:
-        h = max(8.0, self.height + self.growth * k)
-        t = k if self.turn_at is None or k <= self.turn_at else 2 * self.turn_at - k
-        fx = self.start[0] + self.velocity[0] * t
-        fy = self.start[1] + self.velocity[1] * t
-        w = h * self.identity.aspect
-        return Box(fx - w / 2.0, fy - h, w, h)
+FPS = 25.0
+# A 640x480 camera with a 20 deg field of view, 4 m above the ground and tilted 4.5 deg down: the horizon
+# is near row 97 and a 1.75 m pedestrian is 60 px tall at 53 m, 170 px at 19 m.
+VIEW = CameraView(pan=0.0, tilt=math.radians(-4.5), hfov_deg=20.0, width=640, height=480)
+CAMERA_HEIGHT_M = 4.0
+SENSOR = SensorModel(bits=8, noise=0.012, fpn=0.003, vignetting=0.1, fps=FPS)
+WALK_S = 600.0  # length of a walker's last leg: it keeps walking long after any scene ends
 
 
 @dataclass(frozen=True)
-class Occluder:
-    box: Box
-    level: float  # 8-bit gray level
-
-
-@dataclass(frozen=True)
-class GroundTruth:
-    """One visible pedestrian in one frame: full box, visible fraction after occlusion by others/occluders."""
-
-    id: int
-    box: Box
-    visibility: float
-
-
-@dataclass
 class CrowdScene:
-    width: int = 640
-    height: int = 480
-    walkers: list[Walker] = field(default_factory=list)
-    occluders: list[Occluder] = field(default_factory=list)
-    noise_std: float = 3.0
+    """Pedestrians (ids 1..n) and static occluders seen by a static camera (world built on first use)."""
+
+    walkers: tuple[Pedestrian, ...] = ()
+    occluders: tuple[StaticOccluder, ...] = ()
     seed: int = 0
+    view: CameraView = VIEW
+    camera_height_m: float = CAMERA_HEIGHT_M
+    sensor: SensorModel = SENSOR
+    fps: float = FPS
+
+    @property
+    def width(self) -> int:
+        return self.view.width
+
+    @property
+    def height(self) -> int:
+        return self.view.height
+
+    @cached_property
+    def world(self) -> World:
+        """Thermal look: a cool, low-contrast background (hot people stand out), as `scene.crowd_world`."""
+        v = self.view
+        half_vfov = math.degrees(math.atan2(v.cy, v.fy))
+        tilt = math.degrees(v.tilt)
+        pano = make_panorama(self.seed, az_span_deg=2.0 * (abs(math.degrees(v.pan)) + v.hfov_deg),
+                             el_min_deg=tilt - half_vfov - 1.5, el_max_deg=max(tilt + half_vfov, 0.0) + 1.5,
+                             res_deg=0.025, brightness=0.25, contrast=0.5)
+        return World(pano, (*self.walkers, *self.occluders), self.sensor, seed=self.seed,
+                     camera_height_m=self.camera_height_m)
 
 
-def make_identity(ident: int, rng: np.random.Generator) -> Identity:
-    """Random but distinct clothing temperatures and texture (a fixed low-resolution random pattern)."""
-    return Identity(
-        id=ident,
-        head=float(rng.uniform(200, 245)),
-        torso=float(rng.uniform(120, 215)),
-        legs=float(rng.uniform(100, 200)),
-        texture=rng.uniform(-1.0, 1.0, size=(8, 4)),
-        texture_gain=float(rng.uniform(10, 35)),
-        aspect=float(rng.uniform(0.33, 0.45)),
-    )
+def render(scene: CrowdScene, k: int) -> tuple[np.ndarray, list[Truth]]:
+    """Frame k (uint8) and the truth of every pedestrian at least partly inside the image (sorted by id)."""
+    frame, truths = scene.world.render(k / scene.fps, scene.view)
+    return frame, [tr for tr in truths if tr.in_view]
 
 
-def render_sprite(identity: Identity, w: int, h: int, phase: float) -> tuple[np.ndarray, np.ndarray]:
-    """Gray sprite and alpha mask (h x w) of a pedestrian: head, textured torso, two swinging legs."""
-    w, h = max(w, 3), max(h, 8)
-    img = np.zeros((h, w), np.float32)
-    mask = np.zeros((h, w), np.uint8)
-    tex = cv2.resize(identity.texture.astype(np.float32), (w, h), interpolation=cv2.INTER_LINEAR)
-    head_r = max(1, int(0.09 * h))
-    cv2.circle(mask, (w // 2, head_r + 1), head_r, 1, -1)
-    img[mask > 0] = identity.head
-    torso = np.zeros_like(mask)
-    t0, t1 = int(0.19 * h), int(0.58 * h)
-    cv2.rectangle(torso, (int(0.12 * w), t0), (int(0.88 * w), t1), 1, -1)
-    img[torso > 0] = identity.torso
-    legs = np.zeros_like(mask)
-    swing = int(0.12 * w * np.sin(phase))
-    lw = max(1, int(0.18 * w))
-    for side in (-1, 1):
-        top = (w // 2 + side * int(0.16 * w), t1)
-        bottom = (w // 2 + side * int(0.16 * w) + side * swing, h - 1)
-        cv2.line(legs, top, bottom, 1, lw)
-    legs[torso > 0] = 0
-    img[legs > 0] = identity.legs
-    body = (torso > 0) | (legs > 0)
-    img[body] += identity.texture_gain * tex[body]
-    mask = ((mask > 0) | body).astype(np.uint8)
-    return np.clip(img, 0, 255), mask
+def thermal_look(rng: np.random.Generator) -> Look:
+    """Random but distinct body temperatures (radiance of head, upper and lower body) and texture strength."""
+    return Look(head=float(rng.uniform(0.85, 0.97)), upper=float(rng.uniform(0.5, 0.88)),
+                lower=float(rng.uniform(0.42, 0.8)), texture=float(rng.uniform(0.03, 0.09)))
 
 
-def background(scene: CrowdScene) -> np.ndarray:
-    """Cool, smooth background with fixed low-frequency structure (deterministic by seed)."""
-    rng = np.random.default_rng(scene.seed + 7919)
-    low = cv2.resize(rng.uniform(40, 95, size=(6, 8)).astype(np.float32), (scene.width, scene.height),
-                     interpolation=cv2.INTER_CUBIC)
-    ramp = np.linspace(0, 20, scene.height, dtype=np.float32)[:, None]
-    return low + ramp
+def _ground_x(u: float, range_m: float, view: CameraView = VIEW) -> float:
+    """Lateral ground position (m, positive left) that the image column u shows at forward range range_m."""
+    azimuth, _ = view.unproject(u, view.cy)
+    return range_m * math.tan(azimuth)
 
 
-def render(scene: CrowdScene, k: int, bg: np.ndarray | None = None) -> tuple[np.ndarray, list[GroundTruth]]:
-    """Frame k (uint8) and the ground truth of every pedestrian at least partly inside the image."""
-    img = (background(scene) if bg is None else bg).copy()
-    owner = np.full((scene.height, scene.width), -1, np.int32)
-    areas: dict[int, float] = {}
-    order = sorted(scene.walkers, key=lambda wk: (wk.depth, wk.box(k).y + wk.box(k).h))
-    for wk in order:
-        b = wk.box(k)
-        x0, y0 = round(b.x), round(b.y)
-        sw, sh = round(b.w), round(b.h)
-        sprite, mask = render_sprite(wk.identity, sw, sh, 0.35 * k * np.hypot(*wk.velocity))
-        xs0, ys0 = max(0, x0), max(0, y0)
-        xs1, ys1 = min(scene.width, x0 + sw), min(scene.height, y0 + sh)
-        areas[wk.identity.id] = float(mask.sum())
-        if xs1 <= xs0 or ys1 <= ys0:
-            continue
-        sub_m = mask[ys0 - y0 : ys1 - y0, xs0 - x0 : xs1 - x0] > 0
-        img[ys0:ys1, xs0:xs1][sub_m] = sprite[ys0 - y0 : ys1 - y0, xs0 - x0 : xs1 - x0][sub_m]
-        owner[ys0:ys1, xs0:xs1][sub_m] = wk.identity.id
-    for oc in scene.occluders:
-        x0, y0 = round(oc.box.x), round(oc.box.y)
-        x1, y1 = round(oc.box.x + oc.box.w), round(oc.box.y + oc.box.h)
-        img[max(0, y0):y1, max(0, x0):x1] = oc.level
-        owner[max(0, y0):y1, max(0, x0):x1] = -1
-    rng = np.random.default_rng(scene.seed * 100003 + k)
-    img = cv2.GaussianBlur(img, (3, 3), 0.7) + rng.normal(0.0, scene.noise_std, img.shape).astype(np.float32)
-    ids, counts = np.unique(owner[owner >= 0], return_counts=True)
-    visible = dict(zip(ids.tolist(), counts.tolist()))
-    gts = []
-    for wk in scene.walkers:
-        b = wk.box(k)
-        if b.intersects_image(scene.width, scene.height):
-            vis = visible.get(wk.identity.id, 0) / max(areas.get(wk.identity.id, 1.0), 1.0)
-            gts.append(GroundTruth(wk.identity.id, b, float(min(1.0, vis))))
-    return np.clip(img, 0, 255).astype(np.uint8), gts
+def _speed(px_per_frame: float, range_m: float, view: CameraView = VIEW) -> float:
+    """Ground speed (m/s) that moves a walker at range_m by px_per_frame image columns per frame."""
+    return px_per_frame * FPS * range_m / view.fx
 
 
-def simulated_detections(gts: list[GroundTruth], rng: np.random.Generator, *, min_visibility: float = 0.5,
+def _walker(ident: int, u0: float, range_m: float, legs: tuple[tuple[float, float], ...], look: Look,
+            seed: int, height_m: float = 1.75, width_m: float = 0.6) -> Pedestrian:
+    """A pedestrian centred on column u0 at frame 0 walking laterally: legs of (duration s, vx m/s)."""
+    path = Path((_ground_x(u0, range_m), range_m), tuple(Leg(d, vx, 0.0) for d, vx in legs))
+    return Pedestrian(ident, path, height_m=height_m, width_m=width_m, look=look, seed=seed)
+
+
+def simulated_detections(gts: list[Truth], rng: np.random.Generator, *, min_visibility: float = 0.5,
                          miss_rate: float = 0.05, jitter: float = 0.04, fp_rate: float = 0.05,
                          size: tuple[int, int] = (640, 480)) -> list[Detection]:
     """Detector stand-in (notes seed-004 Section 6): visible GT boxes, misses, jitter, false positives."""
     dets = []
     for g in gts:
-        if g.visibility < min_visibility or rng.random() < miss_rate:
+        if g.visible_fraction < min_visibility or rng.random() < miss_rate:
             continue
         b = g.box
         j = rng.normal(0.0, jitter, 4) * np.array([b.w, b.h, b.w, b.h])
@@ -178,52 +116,73 @@ def simulated_detections(gts: list[GroundTruth], rng: np.random.Generator, *, mi
 
 
 def crossing_scene(seed: int = 0, frames: int = 80) -> CrowdScene:
-    """Two pedestrians walking towards each other on the same line; they overlap fully mid-way (Fig. 6)."""
+    """Two pedestrians walking towards each other on nearly the same line (the left one 1 m nearer): they
+    cross columns 70 <-> 570 in `frames` frames and the nearer one hides the other mid-way (Fig. 6)."""
     rng = np.random.default_rng(seed)
-    a, b = make_identity(1, rng), make_identity(2, rng)
-    y = 360.0 + rng.uniform(-20, 20)
-    v = 500.0 / frames
-    return CrowdScene(walkers=[Walker(a, (70.0, y), (v, 0.0), 120.0, depth=1.0),
-                               Walker(b, (570.0, y + 6.0), (-v, 0.0), 116.0, depth=0.0)], seed=seed)
+    a, b = thermal_look(rng), thermal_look(rng)
+    y = 26.5 + float(rng.uniform(-2.0, 2.0))  # about 120 px tall
+    t = frames / FPS
+    walkers = []
+    for ident, look, r, u0, u1 in ((1, a, y, 70.0, 570.0), (2, b, y + 1.0, 570.0, 70.0)):
+        vx = (_ground_x(u1, r) - _ground_x(u0, r)) / t
+        walkers.append(_walker(ident, u0, r, ((WALK_S, vx),), look, seed, 1.75 - 0.03 * (ident - 1)))
+    return CrowdScene(tuple(walkers), seed=seed)
 
 
 def meeting_scene(seed: int = 0, frames: int = 80) -> CrowdScene:
-    """Two pedestrians walk towards each other, overlap and both turn back where they meet: the motion
-    model predicts that they pass, so only appearance can keep the identities."""
+    """Two pedestrians walk towards each other (4 px per frame), overlap and both turn back where they meet
+    at frame frames // 2: the motion model predicts that they pass, so only appearance can keep the
+    identities."""
     rng = np.random.default_rng(seed)
-    a, b = make_identity(1, rng), make_identity(2, rng)
-    y = 360.0 + rng.uniform(-20, 20)
-    v = 4.0
-    meet = frames // 2
-    x_meet = 320.0
-    left = Walker(a, (x_meet - 8.0 - v * meet, y), (v, 0.0), 120.0, depth=1.0, turn_at=meet)
-    right = Walker(b, (x_meet + 8.0 + v * meet, y + 6.0), (-v, 0.0), 116.0, depth=0.0, turn_at=meet)
-    return CrowdScene(walkers=[left, right], seed=seed)
+    a, b = thermal_look(rng), thermal_look(rng)
+    y = 26.5 + float(rng.uniform(-2.0, 2.0))
+    meet = (frames // 2) / FPS
+    walkers = []
+    for ident, look, r, u_meet, sign in ((1, a, y, 312.0, -1.0), (2, b, y + 1.0, 328.0, 1.0)):
+        v = sign * _speed(4.0, r)  # ground x is positive to the left: the left walker has v < 0
+        u0 = u_meet + sign * 4.0 * (frames // 2)  # 4 px per frame for frames // 2 frames
+        walkers.append(_walker(ident, u0, r, ((meet, v), (WALK_S, -v)), look, seed,
+                               1.75 - 0.03 * (ident - 1)))
+    return CrowdScene(tuple(walkers), seed=seed)
 
 
-def occlusion_scene(seed: int = 0, occluded_frames: int = 10) -> CrowdScene:
-    """One pedestrian walking behind a pole wide enough to hide it fully for occluded_frames frames."""
+def occlusion_scene(seed: int = 0, occluded_frames: int = 10, *, occluder: bool = True,
+                    start_u: float = 100.0) -> CrowdScene:
+    """One pedestrian (100-120 px tall) walking right at 4 px per frame from column start_u behind a pole at
+    the image centre that hides it completely for about occluded_frames frames (none with occluder=False)."""
     rng = np.random.default_rng(seed)
-    ident = make_identity(1, rng)
-    h = 110.0
-    w = h * ident.aspect
-    v = 4.0
-    pole_w = w + v * occluded_frames
-    pole = Occluder(Box(320.0 - pole_w / 2.0, 150.0, pole_w, 300.0), 70.0)
-    return CrowdScene(walkers=[Walker(ident, (100.0, 400.0), (v, 0.0), h)], occluders=[pole], seed=seed)
+    look = thermal_look(rng)
+    height_m, width_m = float(rng.uniform(1.6, 1.9)), float(rng.uniform(0.55, 0.72))
+    range_m, step_px = 28.9, 4.0
+    legs = ((WALK_S, -_speed(step_px, range_m)),)
+    walker = _walker(1, start_u, range_m, legs, look, seed, height_m, width_m)
+    if not occluder:
+        return CrowdScene((walker,), seed=seed)
+    # The pole is nearer; it covers the walker's box (plus two anti-aliased columns on each side) for
+    # occluded_frames steps.
+    pole_range = 20.0
+    pole_px = width_m * VIEW.fx / range_m + step_px * occluded_frames + 4.0
+    obstacle = pole(_ground_x(VIEW.cx, pole_range), pole_range, width_m=pole_px * pole_range / VIEW.fx,
+                    seed=seed)
+    return CrowdScene((walker,), (obstacle,), seed=seed)
 
 
-def random_crowd(seed: int = 0, n: int = 6, frames: int = 120) -> CrowdScene:
-    """n pedestrians on random straight paths across the image (several crossings), one pole occluder."""
+def random_crowd(seed: int = 0, n: int = 6) -> CrowdScene:
+    """n pedestrians 60-170 px tall (about 17-57 m away) entering from either side at 2-5 px per frame on
+    straight paths that drift slowly in range (several crossings), and a pole (18 px wide) in front."""
     rng = np.random.default_rng(seed)
     walkers = []
     for i in range(n):
-        ident = make_identity(i + 1, rng)
-        y = float(rng.uniform(230, 470))
-        h = 60.0 + (y - 230.0) * 0.45 + float(rng.uniform(-8, 8))
+        look = thermal_look(rng)
+        height_m, width_m = float(rng.uniform(1.6, 1.9)), float(rng.uniform(0.55, 0.72))
+        range_m = height_m * VIEW.fy / float(rng.uniform(60.0, 170.0))
         left = rng.random() < 0.5
-        x0 = float(rng.uniform(-20, 200)) if left else float(rng.uniform(440, 660))
-        vx = float(rng.uniform(2.0, 5.0)) * (1 if left else -1)
-        walkers.append(Walker(ident, (x0, y), (vx, float(rng.uniform(-0.4, 0.4))), h, depth=y))
-    pole = Occluder(Box(float(rng.uniform(200, 420)), 120.0, 18.0, 360.0), 65.0)
-    return CrowdScene(walkers=walkers, occluders=[pole], seed=seed)
+        u0 = float(rng.uniform(-20, 200)) if left else float(rng.uniform(440, 660))
+        vx = _speed(float(rng.uniform(2.0, 5.0)), range_m) * (-1.0 if left else 1.0)
+        vy = float(rng.uniform(-0.3, 0.3))
+        path = Path((_ground_x(u0, range_m), range_m), (Leg(WALK_S, vx, vy),))
+        walkers.append(Pedestrian(i + 1, path, height_m=height_m, width_m=width_m, look=look, seed=seed))
+    pole_range = 15.0
+    obstacle = pole(_ground_x(float(rng.uniform(200, 420)), pole_range), pole_range,
+                    width_m=18.0 * pole_range / VIEW.fx, seed=seed)
+    return CrowdScene(tuple(walkers), (obstacle,), seed=seed)

@@ -50,8 +50,9 @@ Scenarios (``scenarios.py``)
     ``CameraView`` per frame, static or a scripted pan lagging the target), ``n_frames``, ``fps`` and
     ``frame(k) -> SceneFrame(index, t, image, truths, target, view)`` (``target`` None when out of view,
     ``occluded`` = the per-frame occlusion flag); iterating a run yields every frame.
-    ``crowd_world(seed, n=12, thermal=True, ...)``: ids 1..n wandering pedestrians (acquisition scenes);
-    ``demo_world(seed)``: the closed-loop demo world.
+    ``crowd_world(seed, n=12, thermal=True, ...)``: ids 1..n pedestrians wandering over a wide area;
+    ``demo_world(seed)``: the closed-loop demo world. The acquisition crowd scenes
+    (``acquisition/crowd.py``) stage their crossings with these actors, textures and sensor model.
 """
 
 from __future__ import annotations
