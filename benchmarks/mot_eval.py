@@ -3,10 +3,13 @@
 
     .venv/bin/python benchmarks/mot_eval.py            # TUD-Campus (det.txt, HOG, motion) + synthetic
     .venv/bin/python benchmarks/mot_eval.py --quick    # fewer synthetic scenes
+    .venv/bin/python benchmarks/mot_eval.py --only tud-det,motion-crowds   # some tables only
 Rows: base association (eq. 1 + eq. 2), + engineered edge descriptor (w3 tau), + Siamese score (gamma),
 + both.
 Columns: MOTA, MOTP (mean IoU of matches), IDF1, ID switches, and Table 6's "precision" (matched / GT, the
 conventional recall) and "recall" (matched / output, the conventional precision); per-frame association time.
+tud-det-sweep re-runs the base and paper rows on TUD det.txt over a 3x3 neighbourhood of (r_pos_rel,
+gate_chi2) and prints mean, sd and range: how much one setting's score on that short sequence is chance.
 """
 
 from __future__ import annotations
@@ -45,6 +48,11 @@ ABLATION = {
     "+ Siamese": {"use_edge": False, "use_siamese": True},
     "+ both (paper 004)": {"use_edge": True, "use_siamese": True},
 }
+
+FAMILIES = ("tud-det", "tud-det-sweep", "tud-motion", "tud-hog", "crossings", "meetings", "crowds",
+            "motion-crowds")
+# Neighbourhood of the defaults for the TUD det.txt sensitivity table: (r_pos_rel, gate_chi2).
+SWEEP = [(r, g) for r in (0.075, 0.08, 0.085) for g in (9.0, 9.21, 9.5)]
 
 Frame = tuple[np.ndarray, list[tuple[int, Box]]]  # image, ground truth (id, box)
 
@@ -161,6 +169,33 @@ def ablation(make_frames: Callable[[], Iterable[Frame]], detector: Detector,
     return out
 
 
+def sweep(make_frames: Callable[[], Iterable[Frame]], detector: Detector, siamese: SiameseFamily,
+          rows: tuple[str, ...] = ("base", "+ both (paper 004)")) -> dict[str, list[Result]]:
+    """The ablation rows re-run with r_pos_rel and gate_chi2 moved a little around their defaults (SWEEP):
+    how much of a difference between two versions is the chaos of one sequence."""
+    replay = Replay(make_frames(), detector)
+    out: dict[str, list[Result]] = {}
+    for name in rows:
+        for r_pos, gate in SWEEP:
+            replay.reset()
+            params = replace(MotParams(), r_pos_rel=r_pos, gate_chi2=gate, **ABLATION[name])
+            trk = MultiTargetTracker(params, siamese)
+            out.setdefault(name, []).append(evaluate(make_frames(), replay, trk))
+    return out
+
+
+def sweep_table(title: str, res: dict[str, list[Result]]) -> str:
+    lines = [f"### {title}", "", "| | MOTA mean +- sd [min, max] | IDF1 mean +- sd [min, max] | IDSW mean |",
+             "|---|---|---|---|"]
+    for name, rs in res.items():
+        cells = []
+        for f in ("mota", "idf1"):
+            v = 100 * np.array([getattr(r, f) for r in rs])
+            cells.append(f"{v.mean():.1f} +- {v.std():.1f} [{v.min():.1f}, {v.max():.1f}]")
+        lines.append(f"| {name} | {cells[0]} | {cells[1]} | {np.mean([r.idsw for r in rs]):.1f} |")
+    return "\n".join(lines) + "\n"
+
+
 def pooled(results: list[dict[str, Result]]) -> dict[str, Result]:
     """Frame-weighted mean of several scenes' results (ID switches summed)."""
     out = {}
@@ -191,31 +226,51 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two synthetic scenes per family instead of five")
     ap.add_argument("--no-hog", action="store_true", help="skip HOG on TUD (about 1 s per frame)")
+    ap.add_argument("--only", default=",".join(FAMILIES),
+                    help=f"comma-separated tables to run (default all): {', '.join(FAMILIES)}")
     args = ap.parse_args(argv)
+    only = {f.strip() for f in args.only.split(",") if f.strip()}
+    unknown = only - set(FAMILIES)
+    if unknown:
+        ap.error(f"unknown --only {sorted(unknown)}; choose from {', '.join(FAMILIES)}")
+    if args.no_hog:
+        only.discard("tud-hog")
     siamese = SiameseFamily.load_default()
     t0 = time.time()
-    print(table("TUD-Campus, MOT15 public detections (det.txt)",
-                ablation(lambda: tud_frames(), MotDetFile(TUD / "det.txt"), siamese)))
-    print(table("TUD-Campus, our motion detector", ablation(lambda: tud_frames(), MotionDetector(), siamese)))
-    if not args.no_hog:
+    if "tud-det" in only:
+        print(table("TUD-Campus, MOT15 public detections (det.txt)",
+                    ablation(lambda: tud_frames(), MotDetFile(TUD / "det.txt"), siamese)))
+    if "tud-det-sweep" in only:
+        print(sweep_table(f"TUD-Campus det.txt, {len(SWEEP)} settings: r_pos_rel 0.075/0.08/0.085 x "
+                          "gate_chi2 9.0/9.21/9.5",
+                          sweep(lambda: tud_frames(), MotDetFile(TUD / "det.txt"), siamese)))
+    if "tud-motion" in only:
+        print(table("TUD-Campus, our motion detector",
+                    ablation(lambda: tud_frames(), MotionDetector(), siamese)))
+    if "tud-hog" in only:
         print(table("TUD-Campus, our HOG people detector (OpenCV default people SVM)",
                     ablation(lambda: tud_frames(), HogPeopleDetector(), siamese)))
     seeds = range(2 if args.quick else 5)
-    cross = [ablation(lambda s=s: crowd_frames(crowd.crossing_scene(s), 80),
-                      SimulatedDetector(crowd.crossing_scene(s), s), siamese) for s in seeds]
-    print(table(f"Synthetic thermal crossings ({len(cross)} scenes x 80 frames), simulated detector",
-                pooled(cross)))
-    meets = [ablation(lambda s=s: crowd_frames(crowd.meeting_scene(s), 80),
-                      SimulatedDetector(crowd.meeting_scene(s), s), siamese) for s in seeds]
-    print(table(f"Synthetic thermal meetings: two pedestrians meet and turn back ({len(meets)} scenes x 80 "
-                "frames), simulated detector", pooled(meets)))
-    crowds = [ablation(lambda s=s: crowd_frames(crowd.random_crowd(s, 8), 120),
-                       SimulatedDetector(crowd.random_crowd(s, 8), s), siamese) for s in seeds]
-    print(table(f"Synthetic thermal crowds ({len(crowds)} scenes x 120 frames, 8 pedestrians), simulated "
-                "detector", pooled(crowds)))
-    mcrowds = [ablation(lambda s=s: crowd_frames(crowd.random_crowd(s, 8), 120), MotionDetector(),
-                        siamese) for s in seeds]
-    print(table(f"Synthetic thermal crowds ({len(mcrowds)} scenes), our motion detector", pooled(mcrowds)))
+    if "crossings" in only:
+        cross = [ablation(lambda s=s: crowd_frames(crowd.crossing_scene(s), 80),
+                          SimulatedDetector(crowd.crossing_scene(s), s), siamese) for s in seeds]
+        print(table(f"Synthetic thermal crossings ({len(cross)} scenes x 80 frames), simulated detector",
+                    pooled(cross)))
+    if "meetings" in only:
+        meets = [ablation(lambda s=s: crowd_frames(crowd.meeting_scene(s), 80),
+                          SimulatedDetector(crowd.meeting_scene(s), s), siamese) for s in seeds]
+        print(table(f"Synthetic thermal meetings: two pedestrians meet and turn back ({len(meets)} scenes x "
+                    "80 frames), simulated detector", pooled(meets)))
+    if "crowds" in only:
+        crowds = [ablation(lambda s=s: crowd_frames(crowd.random_crowd(s, 8), 120),
+                           SimulatedDetector(crowd.random_crowd(s, 8), s), siamese) for s in seeds]
+        print(table(f"Synthetic thermal crowds ({len(crowds)} scenes x 120 frames, 8 pedestrians), "
+                    "simulated detector", pooled(crowds)))
+    if "motion-crowds" in only:
+        mcrowds = [ablation(lambda s=s: crowd_frames(crowd.random_crowd(s, 8), 120), MotionDetector(),
+                            siamese) for s in seeds]
+        print(table(f"Synthetic thermal crowds ({len(mcrowds)} scenes), our motion detector",
+                    pooled(mcrowds)))
     print(f"total {time.time() - t0:.0f} s")
     return 0
 

@@ -8,6 +8,20 @@ import pytest
 
 from swir_tracker_ros.acquisition.association import FORBIDDEN, CostWeights, Detection, assign, cost_matrix
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker, TrackStatus
+from swir_tracker_ros.acquisition.motion import (
+    ALL_EDGES,
+    BOTTOM,
+    LEFT,
+    RIGHT,
+    TOP,
+    box_model,
+    edge_model,
+    gate_threshold,
+    measurement,
+    state_from_box,
+    visible_edges,
+)
+from swir_tracker_ros.kalman.standard import update
 from swir_tracker_ros.types import Box
 
 FRAME = np.full((240, 320), 60, np.uint8)
@@ -101,3 +115,71 @@ def test_invalid_parameters_are_rejected() -> None:
 
     with pytest.raises(ParameterError, match="gate_chi2"):
         MultiTargetTracker(MotParams(use_siamese=False, gate_chi2=-1.0))
+
+
+def test_gate_threshold_keeps_the_confidence_of_the_centre_gate() -> None:
+    assert gate_threshold(9.21, 2) == 9.21
+    assert gate_threshold(9.21, 1) == pytest.approx(6.63, abs=0.01)  # chi^2_1(0.99)
+    assert gate_threshold(9.21, 3) == pytest.approx(11.34, abs=0.01)  # chi^2_3(0.99)
+
+
+def test_all_four_edges_measure_the_same_as_the_box() -> None:
+    box, seen = Box(100, 80, 30, 80), Box(104, 83, 26, 84)
+    _, _, H, R = box_model(1.0, 4.0, 6.4, 8.0)
+    x, P = state_from_box(box), np.diag([40.0, 40.0, 60.0, 60.0, 9.0, 9.0])
+    x_box, P_box = update(x, P, measurement(seen), R, H)
+    z, He, Re = edge_model(H, R, seen, ALL_EDGES)
+    x_edge, P_edge = update(x, P, z, Re, He)
+    assert np.allclose(x_box, x_edge) and np.allclose(P_box, P_edge)
+    z, He, Re = edge_model(H, R, seen, (LEFT,))
+    assert z.tolist() == [104.0] and He.shape == (1, 6) and Re[0, 0] == pytest.approx(6.4**2 + 8.0**2 / 4)
+
+
+def test_visible_edges_tell_occlusion_from_scale_change_and_fragments() -> None:
+    pred, tol = Box(100, 100, 40, 100), (5.0, 5.0, 5.0, 5.0)
+
+    def edges(det: Box) -> tuple[int, ...]:
+        return visible_edges(pred, det, 0.75, 0.5, tol)
+
+    assert edges(Box(103, 101, 38, 99)) == ALL_EDGES  # a full view
+    assert edges(Box(90, 90, 60, 130)) == ALL_EDGES  # larger: a track may always grow
+    assert edges(Box(101, 100, 18, 100)) == (LEFT, TOP, BOTTOM)  # walking behind a pole on its right
+    assert edges(Box(121, 100, 19, 100)) == (TOP, RIGHT, BOTTOM)  # coming out on the pole's right
+    assert edges(Box(100, 100, 40, 60)) == (LEFT, TOP, RIGHT)  # legs hidden by a wall
+    assert edges(Box(111, 100, 18, 100)) == ALL_EDGES  # shrunk on both sides: a change of scale
+    assert edges(Box(180, 100, 18, 100)) == ALL_EDGES  # far edge outside the predicted box: not this track's
+    assert edges(Box(133, 140, 8, 25)) == (RIGHT,)  # an arm out on the right, mid-height: a fragment
+    assert edges(Box(133, 230, 8, 25)) == ALL_EDGES  # a fragment below the predicted box
+    assert visible_edges(pred, Box(101, 100, 18, 100), 0.0, 0.5, tol) == ALL_EDGES  # 0 = off (the paper)
+
+
+def _walk(trk: MultiTargetTracker, boxes: list[Box], cut: int = 0) -> None:
+    """Step boxes (one per frame); the last `cut` are seen with their right part hidden (width 12)."""
+    for k, b in enumerate(boxes):
+        seen = Box(b.x, b.y, 12, b.h) if k >= len(boxes) - cut else b
+        trk.step(_frame_with([seen]), [Detection(seen)])
+
+
+def test_a_pedestrian_cut_by_an_occluder_keeps_its_size_and_position() -> None:
+    walk = [Box(60 + 3 * k, 80, 30, 80) for k in range(16)]  # 3 px per frame to the right
+    occluded, paper = _tracker(), _tracker(partial_ratio=0.0)
+    for trk in (occluded, paper):
+        _walk(trk, walk[:12])
+        assert trk.tracks[0].status is TrackStatus.CONFIRMED
+    template = occluded.tracks[0].appearance
+    _walk(occluded, walk[12:], cut=4)
+    _walk(paper, walk[12:], cut=4)
+    t, p = occluded.tracks[0], paper.tracks[0]
+    assert t.partial_run == 4 and t.appearance is template  # edges only; the full view stays the template
+    assert t.box.w > 27 and abs(t.box.cx - walk[-1].cx) < 3 and abs(t.x[4] - 3.0) < 0.6
+    assert p.box.w < 20 and p.box.cx < walk[-1].cx - 6  # the paper's full update shrinks and drags the box
+
+
+def test_a_lasting_change_of_size_is_measured_in_full_after_partial_max_run() -> None:
+    walk = [Box(60 + 3 * k, 80, 30, 80) for k in range(20)]
+    trk = _tracker(partial_max_run=5)
+    _walk(trk, walk[:12])
+    _walk(trk, walk[12:17], cut=5)
+    assert trk.tracks[0].partial_run == 5 and trk.tracks[0].box.w > 27
+    _walk(trk, walk[17:], cut=3)
+    assert trk.tracks[0].partial_run == 0 and trk.tracks[0].box.w < 22  # the narrow box is the target now

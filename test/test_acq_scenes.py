@@ -82,9 +82,16 @@ def test_pedestrian_occluded_for_ten_frames_keeps_its_id() -> None:
 
 
 def test_occlusion_with_our_motion_detector_keeps_the_id() -> None:
-    # Holds for this seed only (1 of seeds 0-7; it held for 1 of seeds 0-5 with crowd.py's former sprites):
-    # usually an arm or leg emerges first, its small box shrinks the track and the whole pedestrian then
-    # falls outside the gate (a new ID). See docs/acquisition.md, Limitations.
-    scene = crowd.occlusion_scene(5, occluded_frames=10)
-    seen, switches = _identity_map(scene, 80, MultiTargetTracker(MotParams()), MotionDetector())
-    assert switches == 0 and len(seen[1]) > 30 and len(set(seen[1])) == 1
+    # Our motion detector sees the walker go behind the pole and come out piecewise: half a body, then an arm
+    # or a leg first. Those partial boxes update only their visible edges (motion.visible_edges), so the
+    # track keeps its size, position and velocity and the whole pedestrian falls inside its gate again.
+    # Measured: the ID is kept for 7 of seeds 0-7 (seed 1 fails: the box narrows a little per frame on the
+    # way in, each step within partial_ratio, and the slowed track misses the arm); before the partial
+    # update it was kept for 1 of 8 (seed 5), which this threshold rejects.
+    kept = []
+    for seed in range(8):
+        scene = crowd.occlusion_scene(seed, occluded_frames=10)
+        seen, switches = _identity_map(scene, 80, MultiTargetTracker(MotParams()), MotionDetector())
+        if switches == 0 and len(seen.get(1, [])) > 30 and len(set(seen[1])) == 1:
+            kept.append(seed)
+    assert len(kept) >= 6, kept

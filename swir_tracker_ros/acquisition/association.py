@@ -17,7 +17,16 @@ from swir_tracker_ros.acquisition.descriptors import (
     rms_distance,
     siamese_distance,
 )
-from swir_tracker_ros.acquisition.motion import gate_distances2, motion_cost
+from swir_tracker_ros.acquisition.motion import (
+    ALL_EDGES,
+    anchored_box,
+    edge_gate_distance2,
+    gate_distances2,
+    gate_threshold,
+    measurement_matrix,
+    motion_cost,
+    track_visible_edges,
+)
 from swir_tracker_ros.types import Box
 
 FORBIDDEN = 1e9  # cost of a pair outside the gate (never accepted)
@@ -41,6 +50,7 @@ class TrackLike(Protocol):
     predicted: Box
     appearance: Appearance
     history: Sequence[tuple[float, float]]
+    partial_run: int  # consecutive partial updates so far
 
 
 @dataclass(frozen=True)
@@ -57,10 +67,28 @@ class CostWeights:
     use_siamese: bool = True
     gate_chi2: float = 9.21  # chi^2_2(0.99)
     max_cost: float = 250.0  # assignments above this are rejected (project choice)
+    # Partial detections (ours, motion.visible_edges): under partial_ratio of the predicted w or h, cut from
+    # one side (near edge moved at most partial_one_sided of the far edge's move), while the track has had
+    # fewer than partial_max_run partial updates in a row.
+    partial_ratio: float = 0.75
+    partial_one_sided: float = 0.5
+    partial_max_run: int = 5
+
+
+def pair_edges(t: TrackLike, box: Box, w: CostWeights) -> tuple[int, ...]:
+    """The edges of a detection box that measure track t (`motion.visible_edges`); every edge once the track
+    has had partial_max_run partial updates in a row: a change of size seen that long is the target's."""
+    ratio = w.partial_ratio if t.partial_run < w.partial_max_run else 0.0
+    return track_visible_edges(t.x, t.P, t.R, box, ratio, w.partial_one_sided, w.gate_chi2)
 
 
 def cost_matrix(tracks: Sequence[TrackLike], dets: Sequence[Detection], w: CostWeights) -> np.ndarray:
     """Pair costs C(i, j) = theta + w3 tau + gamma + m (eq. 11 + eq. 2); FORBIDDEN outside the gate.
+
+    A full detection is gated on its centre (Section 3.1, chi^2 with 2 dof). A partial one (cut by an
+    occluder or the image border, `motion.visible_edges`) is gated on its visible edges against the same
+    edges of the predicted full box, at the same confidence, and its motion cost m is that of the full box
+    anchored at those edges (ours): its own centre is not the target's.
 
     gamma is only defined when both sides carry embeddings (boxes >= the Siamese minimum size); other gated
     pairs get the median gamma of the defined pairs of this frame so that one assignment problem keeps
@@ -70,17 +98,24 @@ def cost_matrix(tracks: Sequence[TrackLike], dets: Sequence[Detection], w: CostW
     C = np.full((n, m), FORBIDDEN)
     gamma = np.full((n, m), np.nan)
     centres = np.array([d.box.center for d in dets], dtype=np.float64).reshape(m, 2)
+    H = measurement_matrix()
     for i, t in enumerate(tracks):
+        pred = t.predicted
         inside = gate_distances2(t.x, t.P, t.R, centres) <= w.gate_chi2
+        edges = [pair_edges(t, d.box, w) for d in dets]
+        for j, e in enumerate(edges):
+            if e != ALL_EDGES:
+                d2 = edge_gate_distance2(t.x, t.P, H, t.R, dets[j].box, e)
+                inside[j] = d2 <= gate_threshold(w.gate_chi2, len(e))
         for j in np.flatnonzero(inside):
             d = dets[j]
             a = d.appearance
             if a is None:
                 raise ValueError("detections must be described before association")
-            c = base_appearance_cost(t.appearance, t.predicted, a, d.box, d.score, w.base)
+            c = base_appearance_cost(t.appearance, pred, a, d.box, d.score, w.base)
             if w.use_edge:
                 c += w.w3 * rms_distance(t.appearance.edge, a.edge)
-            c += motion_cost(t.predicted, d.box, t.history, w.w_dst, w.w_dev)
+            c += motion_cost(pred, anchored_box(pred, d.box, edges[j]), t.history, w.w_dst, w.w_dev)
             C[i, j] = c
             if w.use_siamese:
                 g = siamese_distance(t.appearance, a, w.w1, w.w2)

@@ -11,13 +11,16 @@ from enum import Enum
 
 import numpy as np
 
-from swir_tracker_ros.acquisition.association import CostWeights, Detection, assign, cost_matrix
+from swir_tracker_ros.acquisition.association import CostWeights, Detection, assign, cost_matrix, pair_edges
 from swir_tracker_ros.acquisition.descriptors import Appearance, BaseWeights, describe, to_gray8
 from swir_tracker_ros.acquisition.motion import (
+    ALL_EDGES,
     box_from_state,
     box_model,
+    edge_model,
     initial_covariance,
     measurement,
+    measurement_matrix,
     state_from_box,
 )
 from swir_tracker_ros.acquisition.siamese import SiameseFamily
@@ -47,6 +50,16 @@ class MotParams:
     use_siamese: bool = _f(True, "add the Siamese score gamma (needs the ONNX models)")
     gate_chi2: float = _f(9.21, "Mahalanobis gate on the centre, chi^2 with 2 dof (0.99)", 0.1, 1e4)
     max_cost: float = _f(1e6, "reject an assignment costing more than this", 0.0, 1e9)
+    partial_ratio: float = _f(0.75, "a detection narrower or shorter than this fraction of the predicted "
+                              "box, cut from one side and inside it, is partial (an occluder or the image "
+                              "border hides the rest): gated and updated on its visible edges only, template "
+                              "kept; 0 = every detection is full (the paper)", 0.0, 1.0)
+    partial_one_sided: float = _f(0.5, "a cut is one-sided when the detection's near edge moved at most this "
+                                  "fraction of its far edge (else a change of scale, measured in full)",
+                                  0.0, 1.0)
+    partial_max_run: int = _f(5, "after this many partial updates in a row a track is updated in full "
+                              "again: a change of size that lasts is the target's (5 hits, as confirm_hits)",
+                              1, 1000)
     confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits", 0, 100)
     tentative_max_miss: int = _f(5, "a tentative track missed this many frames is deleted", 1, 100)
     history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
@@ -74,7 +87,8 @@ class MotParams:
         base = BaseWeights(self.w_lbp, self.w_mean, self.w_std, self.w_height, self.w_width, self.w_score,
                            self.w_overlap)
         return CostWeights(base, self.w1, self.w2, self.w3, self.w_dst, self.w_dev, self.use_edge,
-                           self.use_siamese, self.gate_chi2, self.max_cost)
+                           self.use_siamese, self.gate_chi2, self.max_cost, self.partial_ratio,
+                           self.partial_one_sided, self.partial_max_run)
 
 
 class TrackStatus(str, Enum):
@@ -98,6 +112,7 @@ class Track:
     misses: int = 0
     age: int = 1
     matched: bool = True
+    partial_run: int = 0  # consecutive partial updates (motion.visible_edges)
     last_box: Box = field(default_factory=lambda: Box(0, 0, 1, 1))
 
     @property
@@ -190,11 +205,22 @@ class MultiTargetTracker:
         return [t for t in self.tracks if t.displayed and t.misses <= p.display_max_miss]
 
     def _update(self, t: Track, d: Detection) -> None:
+        """Kalman update and template replacement (Section 3.1). A partial detection (`motion.visible_edges`)
+        updates the state with its visible edges only (`motion.edge_model`), with the measurement noise of
+        the predicted box, and keeps the template of the last full detection (ours: an arm coming out from
+        behind a pole must neither shrink the box nor become the appearance the whole body is compared
+        with; notes seed-004 Section 4 names the paper's unconditional template replacement a drift risk)."""
         p = self.params
-        _, _, H, R = self._noise(d.box.h)
-        t.x, t.P = update(t.x, t.P, measurement(d.box), R, H)
         assert d.appearance is not None
-        t.appearance = d.appearance  # template replaced by the last associated detection (Section 3.1)
+        edges = pair_edges(t, d.box, self.weights)
+        t.partial_run = 0 if edges == ALL_EDGES else t.partial_run + 1
+        if edges == ALL_EDGES:
+            _, _, H, R = self._noise(d.box.h)
+            t.x, t.P = update(t.x, t.P, measurement(d.box), R, H)
+            t.appearance = d.appearance  # template replaced by the last associated detection (Section 3.1)
+        else:
+            z, He, Re = edge_model(measurement_matrix(), t.R, d.box, edges)
+            t.x, t.P = update(t.x, t.P, z, Re, He)
         t.last_box = d.box
         t.hits += 1
         t.misses = 0
@@ -206,6 +232,7 @@ class MultiTargetTracker:
     def _miss(self, t: Track) -> None:
         p = self.params
         t.misses += 1
+        t.partial_run = 0  # a run of partial views is consecutive frames
         if t.status is TrackStatus.CONFIRMED and t.misses >= p.history_threshold:
             t.status = TrackStatus.DRIFTING
 
