@@ -20,6 +20,8 @@ from swir_tracker_ros.kalman import (
     Huber,
     KalmanFilter,
     RobustKalmanFilter,
+    ThresholdMap,
+    UpdateInfo,
     dcfca_box_model,
     kcf_box_model,
 )
@@ -41,6 +43,7 @@ def _as_box(box: object) -> Box:
 
 
 SIZE_RATES = ("vs", "vw", "vh")  # state entries that change the box size (kalman/models.py names)
+CENTRE_RATES = ("vx", "vy", "vxc", "vyc")  # state entries that move the box centre
 
 
 class Tracker:
@@ -48,8 +51,9 @@ class Tracker:
 
     Per frame (paper 000 Fig. 2, dissertation §1.7 pseudo-code): Kalman prediction (+ ego shift),
     5-scale search at the prediction, failure detection (PSR < 7 for KCF, APCE <= 0.6 mean for DCF-CA),
-    3x3 re-detection grid on failure, robust Kalman update with a peak-adaptive Huber threshold, and a
-    model update only on confident frames. Variant `cf` is the bare correlation filter.
+    3x3 re-detection grid on failure, robust Kalman update with a peak-adaptive Huber threshold (the
+    motion held while re-detecting, `_redetection_update`), and a model update only on confident frames.
+    Variant `cf` is the bare correlation filter.
     """
 
     def __init__(self, params: TrackerParams | None = None) -> None:
@@ -82,6 +86,7 @@ class Tracker:
         self._kf: KalmanFilter | None = None
         self._model = None
         self._size_rates: list[int] = []
+        self._centre_rates: list[int] = []
         self._noise: AdaptiveNoise | None = None
         self._box: Box | None = None  # current estimate, conditioned-image pixels
         self._init_size = (0.0, 0.0)
@@ -117,6 +122,7 @@ class Tracker:
         if p.variant != "cf":
             self._model = kcf_box_model() if p.pipeline == "kcf" else dcfca_box_model(b.w, b.h)
             self._size_rates = [i for i, n in enumerate(self._model.names) if n in SIZE_RATES]
+            self._centre_rates = [i for i, n in enumerate(self._model.names) if n in CENTRE_RATES]
             if p.variant == "kalman":
                 self._kf = KalmanFilter(self._model)
             else:
@@ -217,9 +223,14 @@ class Tracker:
         )
         meas = Box.from_center(det.cx, det.cy, *size)
         k = self._threshold(det.peak)
-        info = kf.update(model.measurement_from_box(meas), threshold=k)
+        z = model.measurement_from_box(meas)
+        if failed:  # the winner may still be a window at the prediction (the normal-mode search)
+            outer = not any(det is d for d in dets)
+            info = self._redetection_update(z, k, det.peak, outer)
+        else:
+            info = kf.update(z, threshold=k)
         if self._noise is not None and not info.coasted:
-            kf.R = self._noise.push(model.measurement_from_box(meas), kf.x, kf.P, kf.H, used=info.used)
+            kf.R = self._noise.push(z, kf.x, kf.P, kf.H, used=info.used)
         out = model.box_from_state(kf.x)
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
@@ -244,6 +255,41 @@ class Tracker:
         )
 
     # ------------------------------------------------------------------ pieces
+    def _redetection_update(self, z: np.ndarray, k: float | None, peak: float, outer: bool) -> UpdateInfo:
+        """Kalman update while re-detecting: the motion is held, outliers cannot steer it (ours).
+
+        During re-detection every measurement is suspect (paper 000: "the errors caused by ...
+        occlusions, when the multiple search windows are activated, present the outliers and need to
+        be removed"), and a long occlusion feeds the filter nothing but outliers, past the 25 %
+        breakdown point of the Huber filter the paper cites. Each clipped outlier still moves the
+        state by up to k d (eq. 33-34), and their bias piles up in the velocity, so the prediction
+        that places the grid drifts away from where the target re-appears (the paper's premise is that
+        the target keeps its pre-occlusion velocity: "the Kalman filter predicts the area for object
+        re-detection"). Therefore, while re-detecting:
+
+        - the best peak of an *outer* grid window (`outer`: not one of the windows at the prediction)
+          that lies in the floor band of the adaptive threshold map (eq. 38: PV < 0.25, eq. 6.9:
+          g_max < 0.125; "the detection may not actually represent the response of the tracked
+          object") is no measurement: the filter coasts (`update(None)`); variants with a
+          peak-adaptive threshold only. A floor-band peak at the prediction is kept, as in normal mode
+          (partly hidden or turned targets give such peaks near the prediction: OTB jogging-1,
+          PTB-TIR airplane);
+        - any other measurement corrects the centre (robust update with k from the peak) but not the
+          centre velocity, which is restored after the update (the size velocity is already held at
+          zero while re-detecting). Normal tracking updates the velocity again.
+        """
+        kf, p = self._kf, self.params
+        adaptive = p.variant in ("robust_adaptive", "robust_adaptive_r")
+        if adaptive and outer and self._threshold_map().at_floor(peak):
+            return kf.update(None, threshold=k)
+        held = kf.x[self._centre_rates].copy()
+        info = kf.update(z, threshold=k)
+        kf.x[self._centre_rates] = held
+        return info
+
+    def _threshold_map(self) -> ThresholdMap:
+        return PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA
+
     def _failure(self, det: Detection) -> bool:
         """Failure detection: PSR < threshold (paper 000) or APCE <= 0.6 x mean APCE (eq. 4.96)."""
         p = self.params
@@ -261,7 +307,7 @@ class Tracker:
             return None
         if v == "robust":
             return self.params.fixed_huber_threshold
-        return (PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA)(peak)
+        return self._threshold_map()(peak)
 
     def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
         """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure."""

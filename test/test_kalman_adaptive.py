@@ -58,6 +58,18 @@ def test_threshold_tables_equal_the_printed_branches() -> None:
     assert DISSERTATION_DCFCA(0.1375) == pytest.approx(0.8)
     assert DISSERTATION_DCFCA(0.225) == pytest.approx(2.0)
     assert PAPER000_KCF(float("nan")) == 0.1
+
+
+def test_floor_band_is_below_the_first_breakpoint() -> None:
+    """The "not the target" band of eq. 38 / eq. 6.9: k at its floor of 0.1 exactly there."""
+    assert PAPER000_KCF.floor_peak == 0.25 and DISSERTATION_DCFCA.floor_peak == 0.125
+    for table in (PAPER000_KCF, DISSERTATION_DCFCA):
+        for pv in np.linspace(0.0, 1.0, 1001):
+            assert table.at_floor(pv) == (pv < table.floor_peak)
+            if table.at_floor(pv):
+                assert table(pv) == 0.1
+        assert table.at_floor(float("nan")) and table.at_floor(float("-inf"))
+        assert not table.at_floor(table.floor_peak) and table(table.floor_peak + 0.01) > 0.1
     custom = ThresholdMap(((0.0, 1.0), (1.0, 3.0)))
     assert custom(0.5) == 2.0 and custom(9.0) == 3.0
     with pytest.raises(KalmanError):

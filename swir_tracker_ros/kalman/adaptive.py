@@ -35,6 +35,16 @@ class ThresholdMap:
         if any(b <= a for a, b in itertools.pairwise(peaks)):
             raise KalmanError(f"ThresholdMap peaks must be strictly increasing, got {peaks}")
 
+    @property
+    def floor_peak(self) -> float:
+        """Peak of the first breakpoint: below it k is at its floor, the map's "not the target" band
+        (paper 000 eq. 38: PV < 0.25; dissertation eq. 6.9: g_max < 0.125)."""
+        return self.breakpoints[0][0]
+
+    def at_floor(self, peak: float) -> bool:
+        """True when `peak` lies in the floor band (below `floor_peak`, or not finite)."""
+        return not (math.isfinite(peak) and peak >= self.floor_peak)
+
     def __call__(self, peak: float) -> float:
         if not math.isfinite(peak):
             return min(k for _, k in self.breakpoints)
