@@ -153,23 +153,25 @@ def track_visible_edges(x: np.ndarray, P: np.ndarray, R: np.ndarray, det: Box, r
     return visible_edges(pred, det, ratio, one_sided, tol)
 
 
+def _anchor_axis(start: float, size: float, pred_start: float, pred_size: float, start_seen: bool,
+                 end_seen: bool) -> tuple[float, float]:
+    """(start, size) on one axis: both edges seen keep the detection's extent, none the prediction's; with
+    one edge seen the predicted extent hangs from it."""
+    if not start_seen and not end_seen:
+        return pred_start, pred_size
+    if not start_seen:
+        return start + size - pred_size, pred_size
+    if not end_seen:
+        return start, pred_size
+    return start, size
+
+
 def anchored_box(pred: Box, det: Box, edges: Sequence[int]) -> Box:
     """The target's full box implied by a detection: on a cut axis the predicted extent is anchored at the
     visible edge; an axis with both edges visible keeps the detection's extent, one with none (a fragment's)
     the prediction's."""
-    x, w, y, h = det.x, det.w, det.y, det.h
-    if LEFT not in edges and RIGHT not in edges:
-        x, w = pred.x, pred.w
-    elif LEFT not in edges:
-        x, w = det.x + det.w - pred.w, pred.w
-    elif RIGHT not in edges:
-        w = pred.w
-    if TOP not in edges and BOTTOM not in edges:
-        y, h = pred.y, pred.h
-    elif TOP not in edges:
-        y, h = det.y + det.h - pred.h, pred.h
-    elif BOTTOM not in edges:
-        h = pred.h
+    x, w = _anchor_axis(det.x, det.w, pred.x, pred.w, LEFT in edges, RIGHT in edges)
+    y, h = _anchor_axis(det.y, det.h, pred.y, pred.h, TOP in edges, BOTTOM in edges)
     return Box(x, y, w, h)
 
 
