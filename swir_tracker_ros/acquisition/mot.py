@@ -213,14 +213,15 @@ class MultiTargetTracker:
         p = self.params
         assert d.appearance is not None
         edges = pair_edges(t, d.box, self.weights)
-        t.partial_run = 0 if edges == ALL_EDGES else t.partial_run + 1
         if edges == ALL_EDGES:
             _, _, H, R = self._noise(d.box.h)
             t.x, t.P = update(t.x, t.P, measurement(d.box), R, H)
             t.appearance = d.appearance  # template replaced by the last associated detection (Section 3.1)
+            t.partial_run = 0
         else:
             z, He, Re = edge_model(measurement_matrix(), t.R, d.box, edges)
             t.x, t.P = update(t.x, t.P, z, Re, He)
+            t.partial_run += 1
         t.last_box = d.box
         t.hits += 1
         t.misses = 0

@@ -19,8 +19,6 @@ from swir_tracker_ros.paramfield import param as _f
 DETECTORS = ("motion", "hog")
 
 
-
-
 @dataclass
 class AcquisitionParams:
     """Topics, detector choice, hand-off behaviour and the detectors' settings."""

@@ -13,8 +13,6 @@ VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r")
 PIPELINES = ("kcf", "dcf_ca")
 
 
-
-
 @dataclass
 class TrackerParams:
     """Every knob of `Tracker`; defaults are published values (paper 000: `kcf`, dissertation: `dcf_ca`).
