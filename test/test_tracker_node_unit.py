@@ -27,7 +27,12 @@ from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import reported_publishers
 from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode, params_yaml
-from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
+from swir_tracker_ros.nodes.tracker_node_params import (
+    FORMAT_CHANGE_FRAMES,
+    FrameStats,
+    HeadPoseHistory,
+    TrackerNodeParams,
+)
 from swir_tracker_ros.tracker import TrackerParams
 from swir_tracker_ros.types import TrackState
 
@@ -139,14 +144,20 @@ def test_resolution_change_reinitialises_on_the_scaled_box(context: Context) -> 
     try:
         for i in range(5):
             feed(node, scene(100, 96, seed=i), 1.0 + 0.04 * i)
-        big = scene(200, 192, width=2 * W, height=2 * H)  # same view at twice the resolution
-        feed(node, big, 2.0)
+        # Same view at twice the resolution: skipped until FORMAT_CHANGE_FRAMES arrive in a row (one odd
+        # frame never ends a track), then restarted on the scaled box.
+        for k in range(FORMAT_CHANGE_FRAMES):
+            n_box = len(cap.box)
+            feed(node, scene(200, 192, width=2 * W, height=2 * H, seed=20 + k), 2.0 + 0.04 * k)
+            assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
+        assert len(cap.box) == n_box + 1  # the last one is tracked, the ones before only answered
         box = box_from_polygon(cap.box[-1])
         assert abs(box.cx - 200) < 4 and abs(box.w - 48) < 6
-        feed(node, scene(204, 192, width=2 * W, height=2 * H, seed=9), 2.04)
+        feed(node, scene(204, 192, width=2 * W, height=2 * H, seed=9), 2.2)
         assert track_state_from_msg(cap.state[-1]) in (TrackState.TRACKING, TrackState.OCCLUDED)
-        feed(node, scene(100, 96).astype(np.uint8), 2.08)  # bit depth change: also a clean restart
-        assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
+        for k in range(FORMAT_CHANGE_FRAMES):  # bit depth change: also a clean restart
+            feed(node, scene(100, 96).astype(np.uint8), 2.3 + 0.04 * k)
+            assert track_state_from_msg(cap.state[-1]) is TrackState.TRACKING
     finally:
         node.destroy_node()
 

@@ -8,6 +8,7 @@ import sys
 import textwrap
 import time
 
+import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
@@ -30,7 +31,13 @@ from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import input_publishers
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
-from swir_tracker_ros.nodes.tracker_node_params import FrameStats, HeadPoseHistory, TrackerNodeParams
+from swir_tracker_ros.nodes.tracker_node_params import (
+    FORMAT_CHANGE_FRAMES,
+    FrameStats,
+    HeadPoseHistory,
+    TrackerNodeParams,
+    frame_problem,
+)
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
@@ -61,7 +68,10 @@ class TrackerNode(Node):
         self.last_box: Box | None = None
         self.last_result: TrackResult | None = None
         self.last_stamp = 0.0
-        self.frame_key: tuple | None = None
+        self.frame_key: tuple | None = None  # (shape, dtype) of the frames being tracked
+        self._new_key: tuple | None = None  # a different format seen while tracking, and how often in a row
+        self._new_key_count = 0
+        self._format_reinit = False  # the pending init comes from a confirmed format change
         self.prev_pose: tuple[float, float] | None = None
         self.window_start = time.monotonic()
         self._warned: dict[str, tuple[float, int]] = {}  # kind -> (time of the last warning, held back)
@@ -88,6 +98,8 @@ class TrackerNode(Node):
             try:
                 fn(*args)
             except Exception as exc:  # a callback must never take the node down
+                if not self.context.ok():
+                    return  # a signal shut the context down under the callback: not an error
                 self.stats.errors += 1
                 self._warn(fn.__name__, f"{fn.__name__} failed: {type(exc).__name__}: {exc}")
         return wrapped
@@ -119,7 +131,10 @@ class TrackerNode(Node):
         self.last_stamp = stamp
         pixels = frame.pixels
         height, width = pixels.shape[:2]
-        self._check_format(pixels)
+        skip = frame_problem(pixels) or self._check_format(pixels)
+        if skip:
+            self._skip(msg.header, skip)
+            return
         intr = self._intrinsics(width, height)
         shift = self._ego_shift(stamp, intr)
         hint = {"bit_depth": self.params.bit_depth or frame.bit_depth} if pixels.dtype.itemsize == 2 else {}
@@ -199,22 +214,51 @@ class TrackerNode(Node):
         max_age = self.params.max_frame_age_s
         return max_age > 0 and stamp > 0 and self.get_clock().now().nanoseconds * 1e-9 - stamp > max_age
 
-    def _check_format(self, pixels) -> None:
-        """On a size or pixel-format change: restart the core on the last box scaled to the new size."""
+    def _check_format(self, pixels) -> str | None:
+        """Follow the frame size / pixel format; a reason to skip this frame, or None to track it.
+
+        Without an active track a new format is taken at once (a pending init box is scaled to it). While
+        tracking, a frame of another format is skipped until FORMAT_CHANGE_FRAMES of that format arrive in
+        a row; then the core restarts on the last box scaled to the new size. One odd frame (a driver
+        glitch) therefore never ends a track, and a genuine, persistent change re-initialises it.
+        """
         key = (pixels.shape, pixels.dtype.str)
-        old, self.frame_key = self.frame_key, key
+        old = self.frame_key
         if old is None or old == key:
-            return
+            self.frame_key, self._new_key, self._new_key_count = key, None, 0
+            return None
+        active = self.tracker.state in ACTIVE and self.last_box is not None
+        if active:
+            self._new_key_count = self._new_key_count + 1 if key == self._new_key else 1
+            self._new_key = key
+            if self._new_key_count < FORMAT_CHANGE_FRAMES:
+                return (f"format {_fmt_key(key)} differs from the tracked {_fmt_key(old)} "
+                        f"({self._new_key_count} of {FORMAT_CHANGE_FRAMES} in a row before re-initialising)")
         (oh, ow), (nh, nw) = old[0][:2], key[0][:2]
-        was_active = self.tracker.state in ACTIVE and self.last_box is not None
-        self.tracker.reset()
+        self.frame_key, self._new_key, self._new_key_count = key, None, 0
         self.prev_pose = None
         if self.pending_init is not None:
             self.pending_init = _scale_box(self.pending_init, nw / ow, nh / oh)
-        elif was_active:
+        elif active:
             self.pending_init = _scale_box(self.last_box, nw / ow, nh / oh)
-        self._warn("format", f"image format changed from {old} to {key}; tracker re-initialised"
-                   + (f" on {self.pending_init.as_tuple()}" if self.pending_init else ""))
+            self._format_reinit = True
+        self.tracker.reset()
+        self.get_logger().warning(
+            f"image format changed from {_fmt_key(old)} to {_fmt_key(key)}; tracker re-initialised"
+            + (f" on {_fmt_box(self.pending_init)}" if self.pending_init else ""))
+        return None
+
+    def _skip(self, header: Header, reason: str) -> None:
+        """A decoded frame the core is not given: counted, warned about (throttled), and answered on
+        /track/state with the unchanged track state (measured false), never a silent stop."""
+        self.stats.unusable += 1
+        self._warn("unusable", f"skipped a frame: {reason}")
+        last = self.last_result
+        if last is None or self.tracker.state is TrackState.IDLE:
+            result = TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
+        else:
+            result = dataclasses.replace(last, measured=False, model_updated=False, search_windows=())
+        self.pub_state.publish(track_result_to_msg(result, header))
 
     def _intrinsics(self, width: int, height: int) -> Intrinsics:
         if self.params.use_camera_info and self.camera_intr is not None:
@@ -233,10 +277,15 @@ class TrackerNode(Node):
         if self.pending_init is not None:
             box, self.pending_init = self.pending_init, None
             fresh = Tracker(self.tracker_params)  # a rejected box leaves the current track running
+            reinit, self._format_reinit = self._format_reinit, False
             try:
                 fresh.init(pixels, box, **hint)
             except TrackerError as exc:
-                self._warn("init", f"cannot start tracking {box.as_tuple()}: {exc}")
+                if reinit:  # the track ended: say so every time, never throttled
+                    self.get_logger().warning(f"track ended: cannot re-initialise on {_fmt_box(box)} "
+                                              f"after the format change: {exc}")
+                else:
+                    self._warn("init", f"cannot start tracking {box.as_tuple()}: {exc}")
             else:
                 self.tracker = fresh
                 result = TrackResult(box=box, state=TrackState.TRACKING, measured=True)
@@ -283,6 +332,15 @@ class TrackerNode(Node):
 
 def _scale_box(box: Box, sx: float, sy: float) -> Box:
     return Box(box.x * sx, box.y * sy, box.w * sx, box.h * sy)
+
+
+def _fmt_key(key: tuple) -> str:
+    shape, dtype = key
+    return "x".join(map(str, shape)) + f" {np.dtype(dtype).name}"
+
+
+def _fmt_box(box: Box) -> str:
+    return "(" + ", ".join(f"{v:.1f}" for v in box.as_tuple()) + ")"
 
 
 def usage() -> str:

@@ -57,6 +57,23 @@ class TrackerNodeParams:
             raise ParameterError(f"parameter bit_depth must be 0, 8, 10, 12, 14 or 16; got {self.bit_depth}")
 
 
+# A frame smaller than this on either side cannot hold a search window: a driver glitch, never tracked.
+MIN_FRAME_SIDE = 16
+# Consecutive frames of a new size / pixel format before an active track is re-initialised on it; until
+# then such frames are skipped, so that one odd frame never ends a track (issue 14).
+FORMAT_CHANGE_FRAMES = 3
+
+
+def frame_problem(pixels: np.ndarray) -> str | None:
+    """Why a decoded frame cannot be tracked (too small, non-finite pixels), or None when it can."""
+    height, width = pixels.shape[:2]
+    if min(height, width) < MIN_FRAME_SIDE:
+        return f"{height}x{width} is smaller than {MIN_FRAME_SIDE} pixels on a side"
+    if pixels.dtype.kind == "f" and not np.isfinite(pixels).all():
+        return f"{height}x{width} {pixels.dtype} frame has NaN or infinite pixels"
+    return None
+
+
 class HeadPoseHistory:
     """Recent (stamp, pan, tilt) samples; `at(t)` interpolates linearly between samples.
 
@@ -101,6 +118,7 @@ class FrameStats:
     received: int = 0
     processed: int = 0
     malformed: int = 0
+    unusable: int = 0  # decoded but not trackable (too small, non-finite) or of an unconfirmed new format
     stale: int = 0
     skipped: int = 0  # frames missing between consecutive stamps (overwritten in the depth-1 queue)
     errors: int = 0
@@ -136,7 +154,8 @@ class FrameStats:
             return float(np.percentile(xs, q)) if xs else math.nan
 
         counts = {"received": self.received, "processed": self.processed,
-                  "dropped_malformed": self.malformed, "dropped_stale": self.stale,
+                  "dropped_malformed": self.malformed, "dropped_unusable": self.unusable,
+                  "dropped_stale": self.stale,
                   "dropped_skipped": self.skipped, "callback_errors": self.errors}
         for k, v in counts.items():
             self.totals[k] = self.totals.get(k, 0) + v
@@ -152,7 +171,8 @@ class FrameStats:
             **{f"window_{k}": v for k, v in counts.items()},
             **{f"total_{k}": v for k, v in self.totals.items()},
         }
-        trouble = bool(self.malformed or self.skipped or self.errors or self.stale)
-        self.received = self.processed = self.malformed = self.stale = self.skipped = self.errors = 0
+        trouble = bool(self.malformed or self.unusable or self.skipped or self.errors or self.stale)
+        self.received = self.processed = self.malformed = self.unusable = self.stale = self.skipped = 0
+        self.errors = 0
         self.latency_ms, self.core_ms, self.age_ms, self.overhead_ms = [], [], [], []
         return values, trouble
