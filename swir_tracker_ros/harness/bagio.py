@@ -140,6 +140,7 @@ class BagReader:
         self.path = Path(path)
         if not self.path.exists():
             raise HarnessError(f"{self.path}: no such bag")
+        _check_readable(self.path)
         self.notes: list[str] = []
         self.read_mode = "directory" if self.path.is_dir() else "storage file"
         self.files: list[Path] = [self.path]
@@ -149,7 +150,7 @@ class BagReader:
             self.version = _metadata_version(self.path)
             self.compression = reader.compression_format if reader.compression_mode else None
             self.compression_mode = reader.compression_mode
-            mcaps = [f for f in self._storage_files(reader) if f.suffix == ".mcap" and f.exists()]
+            mcaps = [f for f in self._storage_files(reader) if f.suffix == ".mcap" and f.is_file()]
             if self.compression is None and mcaps and (chunk := mcap_chunk_compression(mcaps[0])):
                 self.compression = f"{chunk} (mcap chunks)"
             meta = getattr(reader.storage, "metadata", None)
@@ -185,6 +186,8 @@ class BagReader:
         files = [path] if path.is_file() else sorted(
             f for f in path.iterdir() if f.suffix in (".db3", ".mcap")) if path.is_dir() else []
         for f in files:
+            if not f.is_file():
+                continue
             d = scan(f)
             if d is not None:
                 return f"{d.sentence()} ({what})"
@@ -264,10 +267,36 @@ def mcap_chunk_compression(path: Path) -> str | None:
             fh.seek(length, 1)
 
 
+def _regular(path: Path) -> None:
+    """HarnessError for a path that opening would block on or that is no file: a FIFO named x.db3 or
+    x.mcap, a socket, a device (opening a FIFO waits for a writer forever)."""
+    if path.exists() and not path.is_file() and not path.is_dir():
+        raise HarnessError(f"{path}: not a regular file (a FIFO, socket or device); a bag is a directory "
+                           "with metadata.yaml or a single .db3 / .mcap file")
+
+
+def _check_readable(path: Path) -> None:
+    """Before rosbags opens `path`: no FIFO anywhere it would read, and a directory has its metadata.yaml
+    (reported by that file's name, with the way to rebuild it)."""
+    _regular(path)
+    if not path.is_dir():
+        return
+    meta = path / "metadata.yaml"
+    if not meta.exists():
+        storage = sorted(f.name for f in path.iterdir() if f.suffix in (".db3", ".mcap"))
+        hint = (f"; `ros2 bag reindex {path}` rebuilds it from {', '.join(storage)}" if storage
+                else "; the directory holds no .db3 / .mcap storage file either")
+        raise HarnessError(f"{meta}: no such file (a rosbag2 directory needs it){hint}")
+    _regular(meta)
+    for f in path.iterdir():
+        _regular(f)
+
+
 def _metadata(path: Path) -> dict[str, Any]:
     meta = path / "metadata.yaml"
     if not meta.exists():
         return {}
+    _regular(meta)
     from ruamel.yaml import YAML
 
     try:
@@ -373,6 +402,7 @@ def sequence_meta(path: Path | str) -> dict[str, Any]:
     """The `swir_sequence` custom-data entry written by make-bag (name, fps, source); {} if absent."""
     custom = BagReader(path).custom
     try:
-        return json.loads(custom.get("swir_sequence", "{}"))
+        meta = json.loads(custom.get("swir_sequence", "{}"))
     except json.JSONDecodeError:
         return {}
+    return meta if isinstance(meta, dict) else {}

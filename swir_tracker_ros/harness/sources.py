@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from itertools import islice
@@ -62,12 +63,47 @@ def open_source(spec: str | Path, max_frames: int | None = None, image_topic: st
     if not path.exists():
         raise HarnessError(f"{path}: no such bag, sequence folder or scenario")
     if path.is_dir() and (path / "gt.txt").exists():
-        meta = json.loads((path / "meta.json").read_text()) if (path / "meta.json").exists() else {}
-        return Source(path.name, "sequence", str(path), float(meta.get("fps", 25.0)), 8, max_frames, meta)
+        meta = read_meta_json(path / "meta.json")
+        return Source(path.name, "sequence", str(path), _fps(meta, path / "meta.json"), 8, max_frames, meta)
     meta = sequence_meta(path)
+    where = f"{path}: custom data swir_sequence"
     name = str(meta.get("name") or (path.name if path.is_dir() else path.stem))
-    return Source(name, "bag", str(path), float(meta.get("fps", 25.0)), meta.get("bits"), max_frames, meta,
-                  image_topic, gt_topic)
+    bits = meta.get("bits")
+    if bits is not None and (isinstance(bits, bool) or not isinstance(bits, int) or not 1 <= bits <= 16):
+        raise HarnessError(f'{where}: "bits" must be an integer from 1 to 16, got {bits!r}')
+    return Source(name, "bag", str(path), _fps(meta, where), bits, max_frames, meta, image_topic, gt_topic)
+
+
+def read_meta_json(path: Path) -> dict:
+    """A sequence folder's meta.json as a dict ({} when absent); HarnessError naming the file when it is
+    not a readable JSON object, or its "fps" / "occlusion_frames" have the wrong type."""
+    if not path.exists():
+        return {}
+    if not path.is_file():
+        raise HarnessError(f"{path}: not a regular file")
+    try:
+        meta = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise HarnessError(f"{path}: cannot be read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise HarnessError(f"{path}: not valid JSON: {exc}") from None
+    if not isinstance(meta, dict):
+        kind = {list: "an array", str: "a string"}.get(type(meta), f"a {type(meta).__name__}")
+        raise HarnessError(f'{path}: must be a JSON object such as {{"fps": 25}}, got {kind}')
+    _fps(meta, path)
+    occ = meta.get("occlusion_frames")
+    if occ is not None and (not isinstance(occ, list)
+                            or not all(isinstance(f, int) and not isinstance(f, bool) for f in occ)):
+        raise HarnessError(f'{path}: "occlusion_frames" must be a list of frame numbers, got {occ!r}')
+    return meta
+
+
+def _fps(meta: dict, where: object) -> float:
+    """meta["fps"] (25 when absent) as a positive finite float; HarnessError naming `where` otherwise."""
+    fps = meta.get("fps", 25.0)
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not math.isfinite(fps) or fps <= 0:
+        raise HarnessError(f'{where}: "fps" must be a positive number, got {fps!r}')
+    return float(fps)
 
 
 def _occluded_set(meta: dict) -> set[int] | None:

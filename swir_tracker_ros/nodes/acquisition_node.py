@@ -30,6 +30,7 @@ from swir_tracker_ros.acquisition.handoff import AutoInitialiser, TrackView, los
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
 from swir_tracker_ros.acquisition.params import AcquisitionParams
 from swir_tracker_ros.errors import AcquisitionError, ParameterError
+from swir_tracker_ros.nodes.graph import check_topic_names
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.types import Box, TrackState
@@ -47,6 +48,7 @@ class AcquisitionNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         self.params = bind_parameters(self, AcquisitionParams, on_change=self._on_params)
+        check_topic_names(self.params)
         self.mot_params = bind_parameters(self, MotParams, prefix=MOT_PREFIX, on_change=self._on_mot_params)
         self.detector = self.params.make_detector()
         self.mot = MultiTargetTracker(self.mot_params)

@@ -4,9 +4,15 @@ integrator reading `/diagnostics`) can tell an input nobody publishes from one t
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Mapping
 
+from rclpy.exceptions import NameValidationException
+from rclpy.expand_topic_name import expand_topic_name
 from rclpy.node import Node
+from rclpy.validate_full_topic_name import validate_full_topic_name
+
+from swir_tracker_ros.errors import ParameterError
 
 PUBLISHERS_KEY = "publishers {}"
 
@@ -27,3 +33,25 @@ def reported_publishers(values: Mapping[str, str], topic: str) -> int:
         return int(values.get(PUBLISHERS_KEY.format(topic), "0"))
     except ValueError:
         return 0
+
+
+def _first_line(exc: Exception) -> str:
+    """The reason in rcl's / rclpy's name-validation text, on one line without the source location."""
+    text = str(exc).split("\n")[0].split(", at /")[0].rstrip(":")
+    for prefix in ("Invalid topic name: ",):
+        text = text.removeprefix(prefix)
+    return text.split(" is invalid: ", 1)[-1]
+
+
+def check_topic_names(params: object) -> None:
+    """Raise `ParameterError` naming the parameter when a `*_topic` field of `params` is not a valid ROS
+    topic name ('', 'bad topic!!', '/a//b', 'x/', '1abc'), before any subscription is created."""
+    for f in dataclasses.fields(params):  # type: ignore[arg-type]
+        value = getattr(params, f.name)
+        if not f.name.endswith("_topic") or not isinstance(value, str):
+            continue
+        try:
+            validate_full_topic_name(expand_topic_name(value, "node", "/"))
+        except (ValueError, NameValidationException) as exc:
+            raise ParameterError(f"parameter {f.name} = {value!r} is not a valid topic name: "
+                                 f"{_first_line(exc)}") from None

@@ -18,7 +18,9 @@ from msg_adapters.geometry import pan_tilt_error_from_msg
 from msg_adapters.joint_state import PanTiltSample, pan_tilt_to_joint_state
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros.errors import ParameterError, PelcoError
 from swir_tracker_ros.nodes.graph import input_publishers
+from swir_tracker_ros.nodes.param_docs import usage_lines
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.pelco.bridge import PositionerBridge
@@ -118,8 +120,20 @@ def _stop_head(node: PositionerNode) -> None:
           "before closing the port", file=sys.stderr, flush=True)
 
 
+def usage() -> str:
+    """`positioner_bridge --help`: how to start the bridge and every parameter with its default."""
+    return "\n".join([
+        "usage: positioner_bridge [--help]",
+        "       positioner_bridge --ros-args --params-file params/positioner.yaml [-p name:=value ...]", "",
+        "Drives a Pelco-D pan-tilt head from /track/pan_tilt_error; see docs/positioner.md.", "",
+        "parameters:", *usage_lines(PositionerParams)])
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_node("positioner_bridge", PositionerNode, argv, before_destroy=_stop_head)
+    """Console entry point `positioner_bridge`: spin until SIGINT/SIGTERM (the head is stopped last);
+    exit 2 on a bad parameter or a port URL that can never be opened."""
+    return run_node("positioner_bridge", PositionerNode, argv, before_destroy=_stop_head, usage=usage,
+                    startup_errors=(ParameterError, PelcoError))
 
 
 if __name__ == "__main__":

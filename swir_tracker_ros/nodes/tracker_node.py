@@ -9,7 +9,6 @@ import textwrap
 import time
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.node import Node
@@ -28,9 +27,10 @@ from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.stamps import stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
 from swir_tracker_ros.errors import TrackerError
-from swir_tracker_ros.nodes.graph import input_publishers
+from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
+from swir_tracker_ros.nodes.param_docs import usage_lines
 from swir_tracker_ros.nodes.ros_params import bind_parameters
-from swir_tracker_ros.nodes.runner import run_node
+from swir_tracker_ros.nodes.runner import run_node, user_arguments
 from swir_tracker_ros.nodes.tracker_node_params import (
     FORMAT_CHANGE_FRAMES,
     FrameStats,
@@ -58,6 +58,7 @@ class TrackerNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         self.params = bind_parameters(self, TrackerNodeParams, on_change=self._on_node_params)
+        check_topic_names(self.params)
         self.tracker_params = bind_parameters(self, TrackerParams, prefix=TRACKER_PREFIX,
                                               on_change=self._on_tracker_params)
         self.tracker = Tracker(self.tracker_params)
@@ -349,9 +350,7 @@ def usage() -> str:
              "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
              "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
     for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
-        for f in dataclasses.fields(cls):
-            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-            lines.append(f"  {prefix}{f.name} (default {default!r}): {f.metadata.get('doc', '')}")
+        lines += usage_lines(cls, prefix)
     return "\n".join(lines)
 
 
@@ -390,14 +389,10 @@ def params_yaml() -> str:
 def main(argv: list[str] | None = None) -> int:
     """Console entry point `tracker`: spin until SIGINT/SIGTERM; exit 2 on a bad parameter."""
     args = list(sys.argv if argv is None else argv)
-    user_args = rclpy.utilities.remove_ros_args(args)[1:]
-    if "-h" in user_args or "--help" in user_args:
-        print(usage())
-        return 0
-    if "--params-yaml" in user_args:
+    if "--params-yaml" in user_arguments(args):
         sys.stdout.write(params_yaml())
         return 0
-    return run_node(NODE_NAME, TrackerNode, args)
+    return run_node(NODE_NAME, TrackerNode, args, usage=usage)
 
 
 if __name__ == "__main__":

@@ -4,10 +4,15 @@
 from __future__ import annotations
 
 import contextlib
+import importlib.util
+import re
 import time
 from collections.abc import Callable
+from urllib.parse import parse_qs, urlsplit
 
 import serial
+
+from swir_tracker_ros.errors import PelcoError
 
 Log = Callable[[str, str], None]  # (level: "info" | "warn", text)
 
@@ -16,17 +21,56 @@ def no_log(level: str, text: str) -> None:
     """Default logger: drop messages (nodes pass their own)."""
 
 
+_SCHEME = re.compile(r"^[a-z][a-z0-9_]*$")
+_NETWORK = ("socket", "rfc2217")
+_SOCKET_LOGGING = ("debug", "info", "warning", "error")
+
+
+def check_url(url: str) -> None:
+    """`PelcoError` for a port that can never be opened, so that the bridge refuses it at start instead
+    of retrying forever: an empty name, a URL type pyserial does not know (`bogus://x`), a network URL
+    without a host or with a port outside 1-65535 (`socket://127.0.0.1:99999`), an unknown socket://
+    option. A device path is accepted even when absent: USB adapters come and go.
+    """
+    if not url.strip():
+        raise PelcoError("port is empty; give a device path or a pyserial URL such as socket://host:port")
+    if "://" not in url:
+        return
+    scheme = url.split("://", 1)[0].lower()
+    known = bool(_SCHEME.match(scheme)) and importlib.util.find_spec(
+        f"serial.urlhandler.protocol_{scheme}") is not None
+    if not known:
+        raise PelcoError(f"port {url!r} can never be opened: pyserial knows no {scheme!r}:// URLs "
+                         "(use a device path, socket://, rfc2217://, loop://, spy://, hwgrep://)")
+    if scheme not in _NETWORK:
+        return
+    parts = urlsplit(url)
+    try:
+        port = parts.port
+    except ValueError as exc:
+        raise PelcoError(f"port {url!r} can never be opened: {exc}") from None
+    if not parts.hostname or port is None or not 1 <= port <= 65535:
+        raise PelcoError(f"port {url!r} can never be opened: expected {scheme}://<host>:<port 1-65535>")
+    if scheme == "socket":
+        for option, values in parse_qs(parts.query, keep_blank_values=True).items():
+            if option != "logging" or any(v not in _SOCKET_LOGGING for v in values):
+                raise PelcoError(f"port {url!r} can never be opened: socket:// takes only "
+                                 f"?logging={'|'.join(_SOCKET_LOGGING)}, got {option}={values}")
+
+
 class SerialLink:
     """`serial.serial_for_url` with reconnection.
 
     `poll(now)` (re)opens the port when a retry is due and returns True on the call that connected;
     `write` and `read` return False / b"" instead of raising and mark the link down on any error.
     A failure is logged once per outage; the retry delay doubles from `backoff_min` to `backoff_max`.
+    A URL that can never be opened raises `PelcoError` here (`check_url`) instead.
     """
 
     def __init__(self, url: str, baudrate: int = 9600, *, log: Log = no_log, backoff_min: float = 0.2,
                  backoff_max: float = 5.0, write_timeout: float = 0.2,
                  clock: Callable[[], float] = time.monotonic) -> None:
+        check_url(url)
         self.url, self.baudrate = url, baudrate
         self.log, self.clock = log, clock
         self.backoff_min, self.backoff_max, self.write_timeout = backoff_min, backoff_max, write_timeout
