@@ -6,14 +6,15 @@ from setuptools import find_packages, setup
 
 PACKAGE = "swir_tracker_ros"
 
-# Console scripts: `ros2 run swir_tracker_ros <name>` on a ROS install, `<name>` in a venv.
+# Console scripts: `ros2 run swir_tracker_ros <name>` on a ROS install, `<name>` in a venv. The long-running
+# ones go through nodes/entry.py, which keeps a signal during the imports quiet (exit 0, no traceback).
 CONSOLE_SCRIPTS = [
-    "tracker = swir_tracker_ros.nodes.tracker_node:main",
-    "positioner_bridge = swir_tracker_ros.nodes.positioner_node:main",
-    "pelco_sim = swir_tracker_ros.pelco.sim:main",
+    "tracker = swir_tracker_ros.nodes.entry:tracker",
+    "positioner_bridge = swir_tracker_ros.nodes.entry:positioner_bridge",
+    "pelco_sim = swir_tracker_ros.nodes.entry:pelco_sim",
     "harness = swir_tracker_ros.harness.cli:main",
-    "scene_camera = swir_tracker_ros.nodes.scene_camera_node:main",
-    "acquisition = swir_tracker_ros.nodes.acquisition_node:main",
+    "scene_camera = swir_tracker_ros.nodes.entry:scene_camera",
+    "acquisition = swir_tracker_ros.nodes.entry:acquisition",
     "demo = swir_tracker_ros.demo.run:main",
 ]
 

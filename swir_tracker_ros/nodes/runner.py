@@ -160,6 +160,7 @@ def run_node(
         print(usage() if usage is not None else default_usage(name, factory))
         return 0
     signal.signal(signal.SIGINT, _OneInterrupt())
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # rclpy's handler chains to a non-default one
     try:
         check_ros_args(args)
         rclpy.init(args=args)

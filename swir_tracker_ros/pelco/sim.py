@@ -76,6 +76,10 @@ class Simulator:
             self.disconnect_requested = True
         else:
             self.running = False
+            # A second SIGINT (terminal Ctrl-C plus `ros2 launch`) must not kill the interpreter while it
+            # finalises (Python restores the default handlers then): exit 0 either way.
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
     def _event(self, text: str) -> None:
         print(f"EVENT {text} {time.time():.3f}", flush=True)
