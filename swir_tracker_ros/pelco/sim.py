@@ -70,6 +70,7 @@ class Simulator:
         self.disconnects = sorted(args.disconnect_at)
         self.running = True
         self.disconnect_requested = False
+        self.frame_log = open(args.frame_log, "w") if args.frame_log else None  # noqa: SIM115
 
     def _on_signal(self, signum: int, _frame) -> None:
         if signum == signal.SIGUSR1:
@@ -136,6 +137,8 @@ class Simulator:
             if trace_fh:
                 self._trace(writer, trace_fh)
                 trace_fh.close()
+            if self.frame_log is not None:
+                self.frame_log.close()
             print(f"STATS frames={self.head.frames} checksum_errors={self.decoder.checksum_errors} "
                   f"discarded={self.decoder.discarded} dropped={self.faults.dropped} "
                   f"corrupted={self.faults.corrupted}", flush=True)
@@ -152,6 +155,11 @@ class Simulator:
             data = self.faults.mangle(self.transport.readable(fd))
             for frame in self.decoder.feed(data):
                 self.inbound.append((now + self.faults.latency, frame))
+                if self.frame_log is not None:
+                    f = frame
+                    self.frame_log.write(f"{time.time():.4f} {f.address} {f.cmd1:02x} {f.cmd2:02x} "
+                                         f"{f.data1:02x} {f.data2:02x}\n")
+                    self.frame_log.flush()
         while self.inbound and self.inbound[0][0] <= now:
             _, frame = self.inbound.pop(0)
             reply = self.head.apply(frame, now)
@@ -206,6 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--trace", type=Path, default=None,
                     help=f"write true pose CSV ({', '.join(TRACE_COLUMNS)}; "
                     "rad, rad/s, our sign convention, unix time)")
+    ap.add_argument("--frame-log", type=Path, default=None,
+                    help="append every valid frame received: '<unix time> <address> <cmd1> <cmd2> <data1> "
+                    "<data2>' (hex bytes), flushed per frame")
     ap.add_argument("--trace-period", type=float, default=0.02, help="trace row period, s")
     ap.add_argument("--duration", type=float, default=0.0,
                     help="exit after this long, s (0 = run until killed)")
