@@ -145,7 +145,7 @@ def test_node_bad_input_is_one_line_and_exit_2(bad_inputs) -> None:
 
 def test_never_working_urls_are_refused_and_the_message_is_readable() -> None:
     for url in ("bogus://x", "socket://127.0.0.1:99999", "socket://127.0.0.1:0", "socket://:4000",
-                "socket://h:80?logging=verbose", "rfc2217://h:port", ""):
+                "socket://h:80?logging=verbose", "loop://?foo=1", "rfc2217://h:port", ""):
         with pytest.raises(PelcoError) as info:
             SerialLink(url)
         assert "debug|info|warning|error'" not in str(info.value)

@@ -23,14 +23,14 @@ def no_log(level: str, text: str) -> None:
 
 _SCHEME = re.compile(r"^[a-z][a-z0-9_]*$")
 _NETWORK = ("socket", "rfc2217")
-_SOCKET_LOGGING = ("debug", "info", "warning", "error")
+_LOGGING = ("debug", "info", "warning", "error")
 
 
 def check_url(url: str) -> None:
     """`PelcoError` for a port that can never be opened, so that the bridge refuses it at start instead
     of retrying forever: an empty name, a URL type pyserial does not know (`bogus://x`), a network URL
-    without a host or with a port outside 1-65535 (`socket://127.0.0.1:99999`), an unknown socket://
-    option. A device path is accepted even when absent: USB adapters come and go.
+    without a host or with a port outside 1-65535 (`socket://127.0.0.1:99999`), an unknown socket:// or
+    loop:// option. A device path is accepted even when absent: USB adapters come and go.
     """
     if not url.strip():
         raise PelcoError("port is empty; give a device path or a pyserial URL such as socket://host:port")
@@ -42,20 +42,20 @@ def check_url(url: str) -> None:
     if not known:
         raise PelcoError(f"port {url!r} can never be opened: pyserial knows no {scheme!r}:// URLs "
                          "(use a device path, socket://, rfc2217://, loop://, spy://, hwgrep://)")
+    parts = urlsplit(url)
+    if scheme in ("socket", "loop"):  # pyserial's own message for these is garbled ('debug|info|...')
+        for option, values in parse_qs(parts.query, keep_blank_values=True).items():
+            if option != "logging" or any(v not in _LOGGING for v in values):
+                raise PelcoError(f"port {url!r} can never be opened: {scheme}:// takes only "
+                                 f"?logging={'|'.join(_LOGGING)}, got {option}={values}")
     if scheme not in _NETWORK:
         return
-    parts = urlsplit(url)
     try:
         port = parts.port
     except ValueError as exc:
         raise PelcoError(f"port {url!r} can never be opened: {exc}") from None
     if not parts.hostname or port is None or not 1 <= port <= 65535:
         raise PelcoError(f"port {url!r} can never be opened: expected {scheme}://<host>:<port 1-65535>")
-    if scheme == "socket":
-        for option, values in parse_qs(parts.query, keep_blank_values=True).items():
-            if option != "logging" or any(v not in _SOCKET_LOGGING for v in values):
-                raise PelcoError(f"port {url!r} can never be opened: socket:// takes only "
-                                 f"?logging={'|'.join(_SOCKET_LOGGING)}, got {option}={values}")
 
 
 class SerialLink:
