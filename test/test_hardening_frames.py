@@ -192,3 +192,27 @@ def test_installed_tracker_keeps_tracking_through_each_odd_frame(processes: Proc
         assert after[-1] is TrackState.TRACKING, (kind, after, processes.log(proc)[-2000:])
     assert proc.poll() is None
     assert processes.stop(proc) == 0
+
+
+def test_a_failed_restart_ends_the_track_loudly(tracked: Node, monkeypatch) -> None:
+    """Never a silent drop to idle: the failed re-initialisation is logged and /track/state says idle."""
+    from swir_tracker_ros.errors import TrackerError
+    from swir_tracker_ros.nodes import tracker_node
+
+    class Refusing(tracker_node.Tracker):
+        def init(self, *args, **kwargs) -> None:
+            raise TrackerError("refused for the test")
+
+    warnings: list[str] = []
+
+    class Logger:
+        def warning(self, text: str, **_kw) -> None:
+            warnings.append(text)
+
+        info = warning
+
+    monkeypatch.setattr(tracker_node, "Tracker", Refusing)
+    monkeypatch.setattr(tracked.node, "get_logger", lambda: Logger())
+    states = tracked.good(FORMAT_CHANGE_FRAMES, width=2 * W, height=2 * H)
+    assert states[:-1] == [TrackState.TRACKING] * (FORMAT_CHANGE_FRAMES - 1) and states[-1] is TrackState.IDLE
+    assert any("track ended" in w and "refused for the test" in w for w in warnings), warnings

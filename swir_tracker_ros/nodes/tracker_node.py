@@ -72,7 +72,7 @@ class TrackerNode(Node):
         self.frame_key: tuple | None = None  # (shape, dtype) of the frames being tracked
         self._new_key: tuple | None = None  # a different format seen while tracking, and how often in a row
         self._new_key_count = 0
-        self._format_reinit = False  # the pending init comes from a confirmed format change
+        self._restart: str | None = None  # why the pending init restarts a running track (never silent)
         self.prev_pose: tuple[float, float] | None = None
         self.window_start = time.monotonic()
         self._warned: dict[str, tuple[float, int]] = {}  # kind -> (time of the last warning, held back)
@@ -179,6 +179,7 @@ class TrackerNode(Node):
         was = self.tracker.state.value
         self.tracker.reset()
         self.pending_init = None
+        self._restart = None
         self.last_box = None
         self.last_result = None
         response.success = True
@@ -202,6 +203,7 @@ class TrackerNode(Node):
         if self.pending_init is None and self.last_box is not None and self.last_result is not None \
                 and self.last_result.state in ACTIVE:
             self.pending_init = self.last_box
+            self._restart = "the parameter change"
         self.get_logger().info("tracker parameters changed; core restarted")
 
     # ------------------------------------------------------------------ per-frame pieces
@@ -242,7 +244,7 @@ class TrackerNode(Node):
             self.pending_init = _scale_box(self.pending_init, nw / ow, nh / oh)
         elif active:
             self.pending_init = _scale_box(self.last_box, nw / ow, nh / oh)
-            self._format_reinit = True
+            self._restart = "the format change"
         self.tracker.reset()
         self.get_logger().warning(
             f"image format changed from {_fmt_key(old)} to {_fmt_key(key)}; tracker re-initialised"
@@ -278,13 +280,13 @@ class TrackerNode(Node):
         if self.pending_init is not None:
             box, self.pending_init = self.pending_init, None
             fresh = Tracker(self.tracker_params)  # a rejected box leaves the current track running
-            reinit, self._format_reinit = self._format_reinit, False
+            restart, self._restart = self._restart, None
             try:
                 fresh.init(pixels, box, **hint)
             except TrackerError as exc:
-                if reinit:  # the track ended: say so every time, never throttled
+                if restart and self.tracker.state not in ACTIVE:  # the track ended: say so, never throttled
                     self.get_logger().warning(f"track ended: cannot re-initialise on {_fmt_box(box)} "
-                                              f"after the format change: {exc}")
+                                              f"after {restart}: {exc}")
                 else:
                     self._warn("init", f"cannot start tracking {box.as_tuple()}: {exc}")
             else:
