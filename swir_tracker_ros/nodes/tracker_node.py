@@ -220,10 +220,10 @@ class TrackerNode(Node):
     def _check_format(self, pixels) -> str | None:
         """Follow the frame size / pixel format; a reason to skip this frame, or None to track it.
 
-        Without an active track a new format is taken at once (a pending init box is scaled to it). While
-        tracking, a frame of another format is skipped until FORMAT_CHANGE_FRAMES of that format arrive in
-        a row; then the core restarts on the last box scaled to the new size. One odd frame (a driver
-        glitch) therefore never ends a track, and a genuine, persistent change re-initialises it.
+        Without a track or a pending selection a new format is taken at once. Otherwise a frame of another
+        format is skipped until FORMAT_CHANGE_FRAMES of that format arrive in a row; then the core restarts
+        on the last (or the pending) box scaled to the new size. One odd frame (a driver glitch) therefore
+        never ends a track, and a genuine, persistent change re-initialises it.
         """
         key = (pixels.shape, pixels.dtype.str)
         old = self.frame_key
@@ -231,7 +231,7 @@ class TrackerNode(Node):
             self.frame_key, self._new_key, self._new_key_count = key, None, 0
             return None
         active = self.tracker.state in ACTIVE and self.last_box is not None
-        if active:
+        if active or self.pending_init is not None:  # a track, or a selection made in the old format
             self._new_key_count = self._new_key_count + 1 if key == self._new_key else 1
             self._new_key = key
             if self._new_key_count < FORMAT_CHANGE_FRAMES:
@@ -246,9 +246,9 @@ class TrackerNode(Node):
             self.pending_init = _scale_box(self.last_box, nw / ow, nh / oh)
             self._restart = "the format change"
         self.tracker.reset()
-        self.get_logger().warning(
-            f"image format changed from {_fmt_key(old)} to {_fmt_key(key)}; tracker re-initialised"
-            + (f" on {_fmt_box(self.pending_init)}" if self.pending_init else ""))
+        if self.pending_init is not None:  # nothing tracked and nothing selected: nothing to say
+            self.get_logger().warning(f"image format changed from {_fmt_key(old)} to {_fmt_key(key)}; "
+                                      f"tracker re-initialised on {_fmt_box(self.pending_init)}")
         return None
 
     def _skip(self, header: Header, reason: str) -> None:
