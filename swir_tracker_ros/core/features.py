@@ -39,18 +39,15 @@ def sample_patch(
     src = img
     if sx > 2.0 or sy > 2.0:  # strong shrink: pre-filter to limit aliasing
         sigma = 0.5 * max(sx, sy)
-        # Blur only the pixels the warp reads (clamped into the frame, as the replicated border does)
-        # plus the kernel half width k: the same values as blurring the whole frame, because each edge
-        # of that region is either the frame's own edge (replicated in both cases) or k pixels away
-        # from every pixel the warp samples.
+        # Blur only the band of whole rows the warp reads (clamped into the frame, as the replicated
+        # border does) plus the kernel half width k: bit for bit the values of blurring the whole frame
+        # (full-width rows take the same code path; each band edge is the frame's own edge or k rows
+        # away from every row the warp samples).
         k = _blur_margin(sigma)
-        ih, iw = img.shape[:2]
-        c0 = max(min(max(int(np.floor(x0)) - 1, 0), iw - 1) - k, 0)
-        c1 = min(min(max(int(np.ceil(x0 + out_w * sx)) + 1, 0), iw - 1) + k + 1, iw)
+        ih = img.shape[0]
         r0 = max(min(max(int(np.floor(y0)) - 1, 0), ih - 1) - k, 0)
         r1 = min(min(max(int(np.ceil(y0 + out_h * sy)) + 1, 0), ih - 1) + k + 1, ih)
-        src = cv2.GaussianBlur(img[r0:r1, c0:c1], (0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE)
-        x0 -= c0
+        src = cv2.GaussianBlur(img[r0:r1], (0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE)
         y0 -= r0
     M = np.array([[sx, 0.0, x0], [0.0, sy, y0]], dtype=np.float64)
     return cv2.warpAffine(

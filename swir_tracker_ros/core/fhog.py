@@ -66,7 +66,7 @@ class _Workspace:
         if cell > 0:
             self.index = np.empty(4 * npx, dtype=np.intp)
             self.weight = np.empty(4 * npx, dtype=np.float32)
-            self.acc = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float32)
+            self.acc = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float64)
         shape = (n * h, w)
         self.gx, self.gy, self.mag, self.ang, self.o, self.m0, self.m1 = (
             np.empty(shape, dtype=np.float32) for _ in range(7)
@@ -159,8 +159,8 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
     bilinear spatial cells.
 
     One scatter-add (`np.add.at`, 4 entries a pixel: 2 orientation bins x 2 x cells; 2 with hard bins)
-    accumulates straight into a bin-innermost (N*H, wc, 18) buffer, then `cell` vectorised row passes do
-    the y interpolation. Measured under OpenCV 4.14 (docs/speed.md): 18 per-bin planes pooled by
+    accumulates straight into a reused bin-innermost (N*H, wc, 18) float64 buffer, then `cell` vectorised
+    row passes do the y interpolation. Measured under OpenCV 4.14 (docs/speed.md): 18 per-bin planes pooled by
     `cv2.filter2D` and `np.bincount` are both slower than this scatter.
     """
     if patches.ndim == 2:
@@ -186,8 +186,9 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
         np.multiply(m, wx, out=weight[q * npx : (q + 1) * npx].reshape(n, h, w))
     acc = ws.acc
     acc.fill(0.0)
+    # float64 sums in the reference's order (pass q, then pixel order): the bincount's exact numbers
     np.add.at(acc, index, weight)
-    return _pool_rows(acc.reshape(n, h, wc * N_BINS), cell).reshape(n, hc, wc, N_BINS)
+    return _pool_rows(acc.reshape(n, h, wc * N_BINS).astype(np.float32), cell).reshape(n, hc, wc, N_BINS)
 
 
 def orientation_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
