@@ -65,8 +65,9 @@ class _Workspace:
         npx = n * h * w
         if cell > 0:
             self.index = np.empty(4 * npx, dtype=np.intp)
-            self.weight = np.empty(4 * npx, dtype=np.float32)
+            self.weight = np.empty(4 * npx, dtype=np.float64)  # = acc's dtype: ufunc.at's fast loop
             self.acc = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float64)
+            self.acc32 = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float32)
         shape = (n * h, w)
         self.gx, self.gy, self.mag, self.ang, self.o, self.m0, self.m1 = (
             np.empty(shape, dtype=np.float32) for _ in range(7)
@@ -118,17 +119,20 @@ def _orientation_bins(
     o, ob0, ob1 = ws.o.reshape(shape), ws.ob0.reshape(shape), ws.ob1.reshape(shape)
     np.multiply(ang, _BIN_SCALE, out=o)
     od = None
+    lower = ws.m0.reshape(shape)  # scratch
     if soft:
-        np.copyto(ob0, o, casting="unsafe")  # floor, o >= 0
-        od = ws.m1.reshape(shape)
-        np.subtract(o, ob0, out=od, casting="unsafe")
+        np.floor(o, out=lower)
+        od = np.subtract(o, lower, out=ws.m1.reshape(shape))
     else:
-        np.rint(o, out=ws.m0.reshape(shape))
-        np.copyto(ob0, ws.m0.reshape(shape), casting="unsafe")
-    ob0[ob0 >= N_BINS] -= N_BINS
-    np.add(ob0, 1, out=ob1)
-    ob1[ob1 >= N_BINS] = 0
+        np.rint(o, out=lower)
+    np.copyto(ob1, lower, casting="unsafe")  # raw bin 0..18 (o = 18 only at exactly 2 pi)
+    np.take(_LOWER, ob1, out=ob0)  # bin 18 is bin 0
+    np.take(_UPPER, ob1, out=ob1)  # the next bin, cyclic
     return ob0, ob1, od
+
+
+_LOWER = np.array([*range(N_BINS), 0], dtype=np.intp)
+_UPPER = np.array([*range(1, N_BINS), 0, 1], dtype=np.intp)
 
 
 def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
@@ -148,9 +152,11 @@ def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
         np.multiply(rows, np.float32(1.0 - abs(d)), out=t)
         out += t
         if d < 0:  # also feeds the cell above
-            out[:, :-1] += np.float32(-d) * rows[:, 1:]
+            np.multiply(rows[:, 1:], np.float32(-d), out=t[:, :-1])
+            out[:, :-1] += t[:, :-1]
         elif d > 0:  # also feeds the cell below
-            out[:, 1:] += np.float32(d) * rows[:, :-1]
+            np.multiply(rows[:, :-1], np.float32(d), out=t[:, 1:])
+            out[:, 1:] += t[:, 1:]
     return out
 
 
@@ -188,7 +194,9 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
     acc.fill(0.0)
     # float64 sums in the reference's order (pass q, then pixel order): the bincount's exact numbers
     np.add.at(acc, index, weight)
-    return _pool_rows(acc.reshape(n, h, wc * N_BINS).astype(np.float32), cell).reshape(n, hc, wc, N_BINS)
+    acc32 = ws.acc32
+    np.copyto(acc32, acc, casting="same_kind")
+    return _pool_rows(acc32.reshape(n, h, wc * N_BINS), cell).reshape(n, hc, wc, N_BINS)
 
 
 def orientation_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
