@@ -126,8 +126,8 @@ def _orientation_bins(
     else:
         np.rint(o, out=lower)
     np.copyto(ob1, lower, casting="unsafe")  # raw bin 0..18 (o = 18 only at exactly 2 pi)
-    np.take(_LOWER, ob1, out=ob0)  # bin 18 is bin 0
-    np.take(_UPPER, ob1, out=ob1)  # the next bin, cyclic
+    np.take(_LOWER, ob1, out=ob0, mode="clip")  # bin 18 is bin 0 (clip: unbuffered, values are 0..18)
+    np.take(_UPPER, ob1, out=ob1, mode="clip")  # the next bin, cyclic
     return ob0, ob1, od
 
 
