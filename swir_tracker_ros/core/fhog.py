@@ -2,11 +2,12 @@
 """Felzenszwalb HOG (FHOG, 31 channels) for a batch of equally sized patches, from compiled primitives.
 
 Per frame the work is a handful of passes over the pixels, each one OpenCV or numpy call: `cv2.Sobel`
-gradients, `cv2.cartToPolar`, the orientation bins, ONE `np.bincount` that scatters every pixel into its
+gradients, `cv2.cartToPolar`, the orientation bins, ONE `np.add.at` that scatters every pixel into its
 2 orientation bins x 2 x cells, a row pooling over `cell` row phases, and the block normalisation on the
-(small) cell grid. Everything is float32 except the bincount's float64 weights (numpy's bincount
-accumulates in float64). The reference implementation this replaced is kept in test/fhog_reference.py;
-test/test_core_fhog.py pins the equality on real frames.
+(small) cell grid. Every pixel-sized array is a reused per-shape buffer (fresh multi-MB arrays cost a
+page fault per 4 kB; docs/speed.md). Everything is float32 except the scatter's float64 weights and sums,
+which reproduce the replaced `np.bincount` exactly. That implementation is kept in
+test/fhog_reference.py; test/test_core_fhog.py pins bit-identical results on real frames.
 """
 
 from __future__ import annotations
@@ -166,8 +167,9 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
 
     One scatter-add (`np.add.at`, 4 entries a pixel: 2 orientation bins x 2 x cells; 2 with hard bins)
     accumulates straight into a reused bin-innermost (N*H, wc, 18) float64 buffer, then `cell` vectorised
-    row passes do the y interpolation. Measured under OpenCV 4.14 (docs/speed.md): 18 per-bin planes pooled by
-    `cv2.filter2D` and `np.bincount` are both slower than this scatter.
+    row passes do the y interpolation. Measured under OpenCV 4.14 (docs/speed.md): 18 per-bin planes
+    pooled by `cv2.sepFilter2D` take ~3x longer; the old `np.bincount` is as fast in a warm process but
+    allocates its multi-MB output (page faults) on every call.
     """
     if patches.ndim == 2:
         patches = patches[None]
