@@ -48,8 +48,7 @@ def _hist_plan(n: int, h: int, w: int, cell: int) -> tuple[np.ndarray, np.ndarra
     """Flat accumulator index of each pixel's two x cells in the channel-LAST (n*h, wc, 18) layout
     (the orientation bin is added per frame), and the two bilinear x weights.
 
-    Bin-innermost keeps the scatter of one pixel row inside wc * 18 neighbouring accumulator entries
-    (cache friendly, ~3x faster than a channel-first accumulator).
+    Bin-innermost keeps the scatter of one pixel row inside wc * 18 neighbouring accumulator entries.
     """
     x0, x1, wx0, wx1 = _axis_plan(w, cell)
     wc = w // cell
