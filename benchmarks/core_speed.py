@@ -1,10 +1,17 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Speed of the tracking core vs OpenCV's TrackerKCF / TrackerCSRT on the same 576x504 SWIR-like frames.
+"""Speed of the tracking core vs OpenCV's CSRT and KCF (default and single-channel) on the same frames.
 
-Run from the repository root: ``.venv/bin/python benchmarks/core_speed.py [--frames N]``. The OpenCV part
-runs in the separate benchmark venv (``make bench-venv``, opencv-contrib) as a subprocess on the same
-frames, saved to a temporary .npy file. Everything runs on one thread. The last line printed is one JSON
-object with normal_fps, occlusion_fps, opencv_kcf_fps and opencv_csrt_fps (wall clock, decoding excluded).
+Run from the repository root: ``.venv/bin/python benchmarks/core_speed.py [--frames N]``. Synthetic
+576x504 16-bit SWIR-like sequences with a walking target of 24x72, 40x100 and 80x200 pixels; every tracker
+runs on one thread (``cv2.setNumThreads(1)``, BLAS/OpenMP at 1). The OpenCV trackers run in the separate
+benchmark venv (``make bench-venv``, opencv-contrib) as a subprocess on the same frames (8 bit).
+
+Printed, in order: a micro-benchmark of the OpenCV primitives the runtime uses (both venvs' versions), the
+FFT libraries for the filters' real transforms, fps and per-frame p95 of every tracker at every size, a
+per-stage profile of our default pipeline (ms per frame; measured in a separate run with timing wrappers
+installed around the core's functions, so the timed runs carry no overhead), and as the last line one
+JSON object (normal_fps, occlusion_fps, opencv_csrt_fps, opencv_kcf_fps, opencv_kcf_gray_fps at 40x100,
+p95_ms_80x200, and the same per size).
 """
 
 from __future__ import annotations
@@ -15,171 +22,501 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import functools  # noqa: E402
+import importlib  # noqa: E402
+import inspect  # noqa: E402
 import json  # noqa: E402
+import pkgutil  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 BENCH_PY = REPO / ".venv-bench" / "bin" / "python"
+MODELS = REPO / "swir_tracker_ros" / "models"
 WIDTH, HEIGHT = 576, 504  # the dissertation's SWIR camera
-BOX = (200.0, 200.0, 24.0, 72.0)  # a pedestrian at 70-200 m: area 1728 px (dissertation range 196-15315)
+SIZES = ((24, 72), (40, 100), (80, 200))  # target w x h: pedestrians at ~200 m, ~120 m, ~60 m
+HEADLINE = (40, 100)
+START = (200.0, 150.0)  # top-left corner of the target on the first frame
 
 
-def make_frames(n: int, seed: int = 7) -> np.ndarray:
-    """Deterministic 16-bit SWIR-like sequence: low-contrast texture, noise, dead pixels, a walking target."""
+def make_frames(n: int, size: tuple[int, int], seed: int = 7) -> tuple[np.ndarray, tuple[float, ...]]:
+    """Deterministic 16-bit SWIR-like sequence (low-contrast texture, noise, dead pixels, a walking target
+    of `size` = (w, h)) and the first frame's box (x, y, w, h)."""
     import cv2
 
+    tw, th = size
     rng = np.random.default_rng(seed)
     bg = cv2.GaussianBlur(rng.random((HEIGHT, WIDTH)).astype(np.float32), (0, 0), 4)
     bg = 0.3 + 0.2 * (bg - bg.min()) / (bg.max() - bg.min())
     tgt = 0.15 + 0.7 * cv2.resize(
-        rng.random((12, 4)).astype(np.float32), (24, 72), interpolation=cv2.INTER_NEAREST
+        rng.random((12, 4)).astype(np.float32), (tw, th), interpolation=cv2.INTER_NEAREST
     )
     dead = rng.integers(0, WIDTH * HEIGHT, 200)
     frames = np.empty((n, HEIGHT, WIDTH), np.uint16)
-    x, y = BOX[0], BOX[1]
+    x, y = START
+    box = (x, y, float(tw), float(th))
     for k in range(n):
-        x += 1.5 + 0.5 * np.sin(k / 15.0)
-        y += 0.4 * np.cos(k / 20.0)
-        if x > WIDTH - 60:
-            x = 40.0
+        if k:
+            x += 1.5 + 0.5 * np.sin(k / 15.0)
+            y += 0.4 * np.cos(k / 20.0)
+            if x > WIDTH - tw - 40:
+                x = 40.0
         f = bg.copy()
         xi, yi = round(x), round(y)
-        f[yi : yi + 72, xi : xi + 24] = tgt
+        f[yi : yi + th, xi : xi + tw] = tgt
         f += rng.normal(0, 0.01, f.shape).astype(np.float32)
         img = np.clip(20000 + 16000 * f, 0, 65535).astype(np.uint16)
         img.reshape(-1)[dead] = 65535
         frames[k] = img
-    return frames
+    return frames, box
 
 
 def to8bit(frames: np.ndarray) -> np.ndarray:
-    """Global min-max stretch to 8 bit for OpenCV (done once, outside the timed loop)."""
+    """Global percentile stretch to 8 bit for OpenCV (done once, outside the timed loop)."""
     lo, hi = np.percentile(frames[0], [0.5, 99.5])
     return np.clip((frames.astype(np.float32) - lo) * (255.0 / (hi - lo)), 0, 255).astype(np.uint8)
 
 
-def time_ours(frames: np.ndarray, occlusion: bool) -> tuple[float, float, float]:
-    """(wall fps, cpu fps, fraction of frames in the requested search mode) of our tracker."""
-    from swir_tracker_ros.tracker import Tracker, TrackerParams
+def summarise(times: list[float], cpu: float) -> dict:
+    """fps (frames / total wall time), cpu_fps (frames / process CPU time: less disturbed by other jobs on
+    a shared machine) and per-frame wall p50 / p95 / max in ms."""
+    t = np.asarray(times) * 1e3
+    return {
+        "fps": len(t) / (t.sum() / 1e3),
+        "cpu_fps": len(t) / cpu,
+        "p50_ms": float(np.percentile(t, 50)),
+        "p95_ms": float(np.percentile(t, 95)),
+        "max_ms": float(t.max()),
+    }
+
+
+# ---------------------------------------------------------------------------------------------- ours
+def tracker_params(occlusion: bool):
+    from swir_tracker_ros.tracker import TrackerParams
+
+    if not occlusion:
+        return TrackerParams()
+    # occlusion mode: a PSR threshold no response reaches forces the 3x3 grid (full re-detection) every frame
+    return TrackerParams(psr_threshold=100.0, max_occluded_frames=100000)
+
+
+def time_ours(frames: np.ndarray, box: tuple[float, ...], occlusion: bool) -> dict:
+    """Per-frame wall times of our default tracker; `frac` = share of frames in the requested mode."""
+    from swir_tracker_ros.tracker import Tracker
     from swir_tracker_ros.types import Box, SearchMode
 
-    # occlusion mode: a PSR threshold no response reaches forces the 3x3 grid on every frame
-    params = TrackerParams(psr_threshold=100.0, max_occluded_frames=100000) if occlusion else TrackerParams()
-    trk = Tracker(params)
-    trk.init(frames[0], Box(*BOX))
+    trk = Tracker(tracker_params(occlusion))
+    trk.init(frames[0], Box(*box))
     want = SearchMode.MULTI_WINDOW if occlusion else SearchMode.NORMAL
     hits = 0
-    t0, c0 = time.perf_counter(), time.process_time()
+    times = []
+    c0 = time.process_time()
     for f in frames[1:]:
-        hits += trk.update(f).search_mode is want
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        t0 = time.perf_counter()
+        r = trk.update(f)
+        times.append(time.perf_counter() - t0)
+        hits += r.search_mode is want
+    out = summarise(times, time.process_time() - c0)
+    out["frac"] = hits / len(times)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- profile
+class StageTimer:
+    """Exclusive time per stage: a wrapped call's time minus the time of wrapped calls nested in it, so
+    the stages add up to the frame time (the remainder is reported as `other`). Phases (scale search,
+    grid, model update) are also summed inclusively. The clock is this thread's CPU time, so other jobs
+    on a shared machine do not land in a stage."""
+
+    def __init__(self) -> None:
+        self.excl: dict[str, float] = {}
+        self.incl: dict[str, float] = {}
+        self._stack: list[list[float]] = []  # [start, child time]
+
+    def wrap(self, fn: Callable, stage: str, phase: bool = False) -> Callable:
+        if getattr(fn, "_stage_wrapped", False):
+            return fn
+
+        @functools.wraps(fn)
+        def inner(*args, **kwargs):
+            self._stack.append([time.thread_time(), 0.0])
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                start, child = self._stack.pop()
+                dt = time.thread_time() - start
+                self.excl[stage] = self.excl.get(stage, 0.0) + dt - child
+                if phase:
+                    self.incl[stage] = self.incl.get(stage, 0.0) + dt
+                if self._stack:
+                    self._stack[-1][1] += dt
+
+        inner._stage_wrapped = True  # type: ignore[attr-defined]
+        return inner
+
+
+# (module, attribute or Class.method, stage, phase?) - looked up by name and skipped when absent, so the
+# profile survives refactors of tracker.py / detector.py; functions imported by name into other modules
+# are replaced there too (every loaded swir_tracker_ros module is searched for the same object).
+STAGES = (
+    ("swir_tracker_ros.core.conditioning", "FrameConditioner.__call__", "conditioning", False),
+    ("swir_tracker_ros.core.features", "sample_patch", "sampling", False),
+    ("swir_tracker_ros.core.features", "sample_patches", "sampling", False),
+    ("swir_tracker_ros.core.features", "unwindowed_features", "features", False),
+    ("swir_tracker_ros.core.features", "extract_features", "features", False),
+    ("swir_tracker_ros.core.fhog", "fhog", "features", False),
+    ("swir_tracker_ros.core.kcf", "rfft2", "fft/correlation", False),
+    ("swir_tracker_ros.core.kcf", "irfft2", "fft/correlation", False),
+    ("swir_tracker_ros.core.kcf", "gaussian_correlation", "fft/correlation", False),
+    ("swir_tracker_ros.core.kcf", "linear_correlation", "fft/correlation", False),
+    ("swir_tracker_ros.core.kcf", "KCF.respond", "fft/correlation", False),
+    ("swir_tracker_ros.core.dcf_ca", "DCFCA.respond", "fft/correlation", False),
+    ("swir_tracker_ros.core.confidence", "analyse", "peak/PSR analysis", False),
+    ("swir_tracker_ros.core.detector", "FilterBank.detect", "scale search", True),
+    ("swir_tracker_ros.core.detector", "FilterBank.detect_grid", "grid", True),
+    ("swir_tracker_ros.core.detector", "FilterBank.train", "model update", True),
+    ("swir_tracker_ros.core.kcf", "KCF.train", "model update", False),
+    ("swir_tracker_ros.core.dcf_ca", "DCFCA.train", "model update", False),
+)
+
+
+def install_stage_timers(timer: StageTimer) -> list[tuple[object, str, object]]:
+    """Wrap the STAGES functions and every Kalman filter's predict/update; returns what to restore."""
+    restore: list[tuple[object, str, object]] = []
+
+    def patch(owner: object, attr: str, stage: str, phase: bool) -> None:
+        orig = owner.__dict__.get(attr) if isinstance(owner, type) else getattr(owner, attr, None)
+        if orig is None or isinstance(orig, (staticmethod, classmethod)):
+            return
+        wrapped = timer.wrap(orig, stage, phase)
+        restore.append((owner, attr, orig))
+        setattr(owner, attr, wrapped)
+        if not isinstance(owner, type):  # a module function: replace it where it was imported by name
+            for name, mod in list(sys.modules.items()):
+                if name.startswith("swir_tracker_ros") and mod is not owner:
+                    for k, v in list(vars(mod).items()):
+                        if v is orig:
+                            restore.append((mod, k, orig))
+                            setattr(mod, k, wrapped)
+
+    for modname, path, stage, phase in STAGES:
+        try:
+            mod = importlib.import_module(modname)
+        except ImportError:
+            continue
+        owner: object = mod
+        *cls, attr = path.split(".")
+        if cls:
+            owner = getattr(mod, cls[0], None)
+            if owner is None:
+                continue
+        patch(owner, attr, stage, phase)
+    import swir_tracker_ros.kalman as kalman_pkg
+
+    for info in pkgutil.iter_modules(kalman_pkg.__path__):
+        mod = importlib.import_module(f"swir_tracker_ros.kalman.{info.name}")
+        for _, cls in inspect.getmembers(mod, inspect.isclass):
+            if cls.__module__ == mod.__name__:
+                for meth in ("predict", "update"):
+                    if meth in cls.__dict__:
+                        patch(cls, meth, "kalman", False)
+    return restore
+
+
+def profile_ours(frames: np.ndarray, box: tuple[float, ...], occlusion: bool) -> dict[str, float]:
+    """ms per frame per stage (exclusive) and per phase (inclusive, keys 'phase: ...')."""
+    from swir_tracker_ros.tracker import Tracker
+    from swir_tracker_ros.types import Box
+
+    timer = StageTimer()
+    restore = install_stage_timers(timer)
+    try:
+        trk = Tracker(tracker_params(occlusion))
+        trk.init(frames[0], Box(*box))
+        timer.excl.clear()
+        timer.incl.clear()
+        t0 = time.thread_time()
+        for f in frames[1:]:
+            trk.update(f)
+        total = time.thread_time() - t0
+    finally:
+        for owner, attr, orig in reversed(restore):
+            setattr(owner, attr, orig)
     n = len(frames) - 1
-    return n / wall, n / cpu, hits / n
+    out = {k: 1e3 * v / n for k, v in sorted(timer.excl.items(), key=lambda kv: -kv[1])}
+    out["other"] = 1e3 * (total - sum(timer.excl.values())) / n
+    out.update({f"phase: {k}": 1e3 * v / n for k, v in timer.incl.items()})
+    out["total"] = 1e3 * total / n
+    return out
 
 
-def opencv_child(path: str) -> None:
-    """Runs inside .venv-bench: time TrackerKCF and TrackerCSRT on the saved 8-bit frames; print JSON."""
+# ---------------------------------------------------------------------------------------------- primitives
+def best_of(fn: Callable[[], object], reps: int = 5, inner: int = 20) -> float:
+    """Best mean CPU time in microseconds over `reps` runs of `inner` calls (the least disturbed run)."""
+    fn()
+    best = float("inf")
+    for _ in range(reps):
+        t0 = time.process_time()
+        for _ in range(inner):
+            fn()
+        best = min(best, (time.process_time() - t0) / inner)
+    return best * 1e6
+
+
+def primitives(with_dnn: bool = True) -> dict[str, float]:
+    """Microseconds per call of the OpenCV primitives the runtime uses (one thread)."""
+    import cv2
+
+    cv2.setNumThreads(1)
+    rng = np.random.default_rng(1)
+    c128 = rng.random((128, 128, 2)).astype(np.float32)
+    r128 = rng.random((128, 128)).astype(np.float32)
+    frame = rng.random((HEIGHT, WIDTH)).astype(np.float32)
+    M = np.array([[1.1, 0.0, 200.3], [0.0, 1.1, 150.7]])
+    flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+    out = {
+        "version": cv2.__version__,
+        "dft 128x128 complex": best_of(lambda: cv2.dft(c128)),
+        "dft 128x128 real (CCS)": best_of(lambda: cv2.dft(r128)),
+        "mulSpectrums 128x128": best_of(lambda: cv2.mulSpectrums(c128, c128, 0, conjB=True)),
+        "warpAffine 576x504 -> 100x248": best_of(
+            lambda: cv2.warpAffine(frame, M, (100, 248), flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        ),
+        "resize 576x504 -> 288x252 AREA": best_of(
+            lambda: cv2.resize(frame, (288, 252), interpolation=cv2.INTER_AREA)
+        ),
+        "Sobel 576x504 f32": best_of(lambda: cv2.Sobel(frame, cv2.CV_32F, 1, 0, ksize=1)),
+        "GaussianBlur 576x504 f32 s1": best_of(lambda: cv2.GaussianBlur(frame, (0, 0), 1.0)),
+        "cartToPolar 100x248": best_of(lambda: cv2.cartToPolar(frame[:248, :100], frame[:248, 100:200])),
+    }
+    onnx = MODELS / "siamese_whole.onnx"
+    if with_dnn and onnx.is_file():
+        net = cv2.dnn.readNetFromONNX(str(onnx))
+        net.setPreferableBackend(cv2.dnn.DNN_BACKEND_OPENCV)
+        net.setPreferableTarget(cv2.dnn.DNN_TARGET_CPU)
+        blob = rng.standard_normal((8, 1, 64, 64)).astype(np.float32)
+
+        def fwd() -> object:
+            net.setInput(blob)
+            return net.forward()
+
+        out["dnn siamese_whole 8x64x64"] = best_of(fwd, reps=3, inner=5)
+    return out
+
+
+def fft_libraries() -> dict[str, float]:
+    """Microseconds of one forward + inverse real 2-D FFT of a (5, 31, 62, 25) FHOG batch (40x100 target,
+    5 scales) with scipy.fft, numpy.fft and cv2.dft (per plane), the choice behind kcf.rfft2 / irfft2."""
+    import cv2
+    import scipy.fft as sfft
+
+    x = np.random.default_rng(2).random((5, 31, 62, 25)).astype(np.float32)
+    shape = x.shape[-2:]
+
+    def scipy_() -> object:
+        return sfft.irfft2(sfft.rfft2(x, axes=(-2, -1), workers=1), s=shape, axes=(-2, -1), workers=1)
+
+    def numpy_() -> object:
+        return np.fft.irfft2(np.fft.rfft2(x, axes=(-2, -1)), s=shape, axes=(-2, -1))
+
+    flat = x.reshape(-1, *shape)
+
+    def cv2_() -> object:
+        return [
+            cv2.dft(cv2.dft(p, flags=cv2.DFT_COMPLEX_OUTPUT), flags=cv2.DFT_INVERSE | cv2.DFT_REAL_OUTPUT)
+            for p in flat
+        ]
+
+    from swir_tracker_ros.core import kcf
+
+    def ours() -> object:
+        return kcf.irfft2(kcf.rfft2(x), shape)
+
+    return {
+        "scipy.fft rfft2+irfft2 (float32)": best_of(scipy_),
+        "numpy.fft rfft2+irfft2 (float64)": best_of(numpy_),
+        "cv2.dft per plane fwd+inv": best_of(cv2_),
+        "core.kcf rfft2+irfft2 (chosen)": best_of(ours),
+    }
+
+
+# ---------------------------------------------------------------------------------------------- OpenCV
+OPENCV_TRACKERS = ("csrt", "kcf", "kcf_gray")
+
+
+def opencv_child(path: str, box: str) -> None:
+    """Runs inside .venv-bench: time CSRT, KCF (default) and KCF (GRAY, compressed_size 1); print JSON."""
     import cv2
 
     cv2.setNumThreads(1)
     frames = np.load(path)
     bgr = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames]
-    out = {}
-    for name, make in (("kcf", cv2.TrackerKCF_create), ("csrt", cv2.TrackerCSRT_create)):
-        trk = make()
-        trk.init(bgr[0], tuple(int(v) for v in BOX))
+    init_box = tuple(round(float(v)) for v in box.split(","))
+
+    def kcf_gray() -> object:
+        # OpenCV's single-channel configuration (gray in both descriptor slots, 1 compressed channel) on
+        # the 8-bit gray frames themselves: the fastest OpenCV KCF (other single-channel combinations
+        # raise "Matrix operand is an empty matrix" in update, opencv/opencv#22203)
+        p = cv2.TrackerKCF_Params()
+        p.desc_pca = cv2.TrackerKCF_GRAY
+        p.desc_npca = cv2.TrackerKCF_GRAY
+        p.compressed_size = 1
+        return cv2.TrackerKCF_create(p)
+
+    makers = {"csrt": cv2.TrackerCSRT_create, "kcf": cv2.TrackerKCF_create, "kcf_gray": kcf_gray}
+    out: dict[str, object] = {"version": cv2.__version__}
+    for name in OPENCV_TRACKERS:
+        seq = list(frames) if name == "kcf_gray" else bgr  # CSRT / default KCF use colour names: BGR
+        trk = makers[name]()
+        trk.init(seq[0], init_box)
         ok_count = 0
-        t0, c0 = time.perf_counter(), time.process_time()
-        for f in bgr[1:]:
+        times = []
+        c0 = time.process_time()
+        for f in seq[1:]:
+            t0 = time.perf_counter()
             ok, _ = trk.update(f)
+            times.append(time.perf_counter() - t0)
             ok_count += bool(ok)
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        n = len(bgr) - 1
-        out[name] = {"fps": n / wall, "cpu_fps": n / cpu, "ok": ok_count / n}
+        r = summarise(times, time.process_time() - c0)
+        r["ok"] = ok_count / len(times)
+        out[name] = r
     print(json.dumps(out))
 
 
-def time_opencv(frames8: np.ndarray) -> dict:
+def opencv_primitives_child() -> None:
+    """Runs inside .venv-bench: the primitive micro-benchmark of that venv's OpenCV (no dnn)."""
+    print(json.dumps(primitives(with_dnn=False)))
+
+
+def run_bench_child(*args: str) -> dict:
     if not BENCH_PY.exists():
         print(f"OpenCV benchmark venv missing ({BENCH_PY}); run `make bench-venv`", file=sys.stderr)
         return {}
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "frames8.npy")
-        np.save(path, frames8)
-        env = dict(os.environ, PYTHONPATH="")
-        proc = subprocess.run(
-            [str(BENCH_PY), __file__, "--opencv-child", path],
-            capture_output=True,
-            text=True,
-            env=env,
-            check=False,
-        )
+    env = dict(os.environ, PYTHONPATH="")
+    proc = subprocess.run(
+        [str(BENCH_PY), __file__, *args], capture_output=True, text=True, env=env, check=False
+    )
     if proc.returncode != 0:
         print(proc.stderr, file=sys.stderr)
         return {}
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+def time_opencv(frames8: np.ndarray, box: tuple[float, ...]) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "frames8.npy")
+        np.save(path, frames8)
+        return run_bench_child("--opencv-child", path, "--box", ",".join(str(v) for v in box))
+
+
+# ---------------------------------------------------------------------------------------------- main
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--frames", type=int, default=200)
+    ap.add_argument("--frames", type=int, default=150, help="frames per sequence (one per target size)")
     ap.add_argument("--opencv-child", help=argparse.SUPPRESS)
+    ap.add_argument("--opencv-primitives", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--box", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.opencv_child:
-        opencv_child(args.opencv_child)
+        opencv_child(args.opencv_child, args.box)
+        return
+    if args.opencv_primitives:
+        opencv_primitives_child()
         return
     import cv2
 
     cv2.setNumThreads(1)
-    frames = make_frames(args.frames)
-    print(f"{len(frames)} frames {WIDTH}x{HEIGHT} uint16, target {BOX[2]:.0f}x{BOX[3]:.0f} px, one thread")
-    n_fps, n_cpu, n_frac = time_ours(frames, occlusion=False)
-    o_fps, o_cpu, o_frac = time_ours(frames, occlusion=True)
-    print(
-        f"ours normal mode (5 scales)      : {n_fps:7.1f} fps wall, {n_cpu:7.1f} fps cpu "
-        f"({n_frac:.0%} normal)"
+    print(f"{args.frames} frames {WIDTH}x{HEIGHT} uint16 per target size, one thread")
+
+    print("\nOpenCV primitives (us CPU per call, best of 5)  runtime .venv   bench .venv-bench")
+    prim = primitives()
+    prim_b = run_bench_child("--opencv-primitives")
+    for k, v in prim.items():
+        vb = prim_b.get(k, "")
+        if k == "version":
+            print(f"  {'version':45s} {v:>12s}   {vb:>12s}")
+        else:
+            vbs = f"{vb:12.1f}" if isinstance(vb, float) else f"{'-':>12s}"
+            print(f"  {k:45s} {v:12.1f}   {vbs}")
+    print("\nFFT of a (5, 31, 62, 25) FHOG batch, forward + inverse (us CPU, best of 5)")
+    ffts = fft_libraries()
+    for k, v in ffts.items():
+        print(f"  {k:45s} {v:12.1f}")
+
+    results: dict[str, dict] = {}
+    profiles: dict[str, dict] = {}
+    for size in SIZES:
+        tag = f"{size[0]}x{size[1]}"
+        frames, box = make_frames(args.frames, size)
+        res = {
+            "normal": time_ours(frames, box, occlusion=False),
+            "occlusion": time_ours(frames, box, occlusion=True),
+        }
+        res.update(time_opencv(to8bit(frames), box))
+        results[tag] = res
+        profiles[tag] = profile_ours(frames, box, occlusion=False)
+        if size == HEADLINE:
+            profiles[f"{tag} occlusion"] = profile_ours(frames, box, occlusion=True)
+
+    names = {
+        "normal": "ours normal (5 scales)",
+        "occlusion": "ours occlusion (5 scales + grid)",
+        "csrt": "OpenCV CSRT",
+        "kcf": "OpenCV KCF default (CN+gray)",
+        "kcf_gray": "OpenCV KCF gray, 1 channel",
+    }
+    print("\ntracker                              size      fps  cpu fps   p50 ms   p95 ms   max ms")
+    for tag, res in results.items():
+        for key, label in names.items():
+            r = res.get(key)
+            if r:
+                extra = f"  ({r['frac']:.0%} in mode)" if "frac" in r else f"  (ok {r['ok']:.0%})"
+                print(
+                    f"  {label:34s} {tag:7s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} "
+                    f"{r['p95_ms']:8.2f} "
+                    f"{r['max_ms']:8.2f}{extra}"
+                )
+    head = results[f"{HEADLINE[0]}x{HEADLINE[1]}"]
+    for peer in ("csrt", "kcf", "kcf_gray"):
+        if peer in head:
+            ratio = head["normal"]["fps"] / head[peer]["fps"]
+            cpu = head["normal"]["cpu_fps"] / head[peer]["cpu_fps"]
+            print(f"  ratio normal / {names[peer]:28s} at 40x100: {ratio:.2f} (cpu {cpu:.2f})")
+
+    print("\nper-stage profile of the default pipeline, CPU ms/frame (stages exclusive; phases inclusive)")
+    keys = sorted(
+        {k for p in profiles.values() for k in p}, key=lambda k: (k.startswith("phase"), k == "total")
     )
-    print(
-        f"ours occlusion (5 scales + grid) : {o_fps:7.1f} fps wall, {o_cpu:7.1f} fps cpu ({o_frac:.0%} grid)"
-    )
-    ocv = time_opencv(to8bit(frames))
-    kcf, csrt = ocv.get("kcf", {}), ocv.get("csrt", {})
-    for name, r in (("OpenCV TrackerKCF (1 scale, 8 bit)", kcf), ("OpenCV TrackerCSRT (8 bit)", csrt)):
-        if r:
-            print(f"{name:33s}: {r['fps']:7.1f} fps wall, {r['cpu_fps']:7.1f} fps cpu (ok {r['ok']:.0%})")
-    if kcf:
-        print(
-            f"ratio normal / OpenCV KCF        : {n_fps / kcf['fps']:.2f} (cpu {n_cpu / kcf['cpu_fps']:.2f})"
-        )
-    if csrt:
-        print(
-            f"ratio normal / OpenCV CSRT       : {n_fps / csrt['fps']:.2f} "
-            f"(cpu {n_cpu / csrt['cpu_fps']:.2f})"
-        )
-    print(
-        f"occlusion mode >= 25 fps         : {'yes' if o_fps >= 25 else 'no'} "
-        f"(cpu: {'yes' if o_cpu >= 25 else 'no'})"
-    )
-    print(
-        json.dumps(
-            {
-                "normal_fps": round(n_fps, 1),
-                "occlusion_fps": round(o_fps, 1),
-                "opencv_kcf_fps": round(kcf.get("fps", float("nan")), 1),
-                "opencv_csrt_fps": round(csrt.get("fps", float("nan")), 1),
-                "normal_cpu_fps": round(n_cpu, 1),
-                "occlusion_cpu_fps": round(o_cpu, 1),
-                "opencv_kcf_cpu_fps": round(kcf.get("cpu_fps", float("nan")), 1),
-                "opencv_csrt_cpu_fps": round(csrt.get("cpu_fps", float("nan")), 1),
-            }
-        )
-    )
+    print("  " + f"{'stage':26s}" + "".join(f"{t:>20s}" for t in profiles))
+    for k in keys:
+        print("  " + f"{k:26s}" + "".join(f"{p.get(k, 0.0):20.2f}" for p in profiles.values()))
+
+    def fps(tag: str, key: str, kind: str = "fps") -> float:
+        return round(results[tag].get(key, {}).get(kind, float("nan")), 1)
+
+    summary: dict[str, object] = {
+        "normal_fps": fps("40x100", "normal"),
+        "occlusion_fps": fps("40x100", "occlusion"),
+        "opencv_csrt_fps": fps("40x100", "csrt"),
+        "opencv_kcf_fps": fps("40x100", "kcf"),
+        "opencv_kcf_gray_fps": fps("40x100", "kcf_gray"),
+        "p95_ms_80x200": round(results["80x200"]["normal"]["p95_ms"], 2),
+        "p95_ms_80x200_occlusion": round(results["80x200"]["occlusion"]["p95_ms"], 2),
+        "opencv_version": prim["version"],
+    }
+    for tag in results:
+        for key in names:
+            if key in results[tag]:
+                summary[f"{key}_fps_{tag}"] = fps(tag, key)
+                summary[f"{key}_cpu_fps_{tag}"] = fps(tag, key, "cpu_fps")
+                summary[f"{key}_p95_ms_{tag}"] = round(results[tag][key]["p95_ms"], 2)
+    print(json.dumps(summary))
 
 
 if __name__ == "__main__":

@@ -97,11 +97,13 @@ class FrameConditioner:
             raise ConditioningError(f"frame dtype {dtype} is not an integer or float image type")
         if np.issubdtype(dtype, np.floating):
             img = gray.astype(np.float32, copy=False)
+            owned = img is not gray and not np.shares_memory(img, frame)
             if not np.isfinite(img).all():
                 raise ConditioningError("frame contains NaN or infinite pixels")
             full_scale = 1.0 if float(img.max(initial=0.0)) <= 1.0 else None
         else:
-            img = gray.astype(np.float32)
+            img = gray.astype(np.float32)  # a fresh array: the steps below work in place
+            owned = True
             bits = bit_depth if bit_depth else (8 if dtype.itemsize == 1 else 8 * dtype.itemsize)
             full_scale = float(2 ** min(int(bits), 32) - 1)
         stretch = cfg.stretch == "always" or (cfg.stretch == "auto" and dtype != np.uint8)
@@ -113,10 +115,11 @@ class FrameConditioner:
                 hi = a * self._limits[1] + (1 - a) * hi
             self._limits = (lo, hi)
             span = max(hi - lo, 1e-6 * max(abs(hi), 1.0), 1e-12)
-            img = (img - np.float32(lo)) * np.float32(1.0 / span)
+            img = np.subtract(img, np.float32(lo), out=img if owned else None)
+            img *= np.float32(1.0 / span)
             np.clip(img, 0.0, 1.0, out=img)
-        else:
-            img *= np.float32(1.0 / full_scale)
+        elif full_scale != 1.0:
+            img = np.multiply(img, np.float32(1.0 / full_scale), out=img if owned else None)
         if cfg.deinterlace in ("even", "odd"):
             img = single_field(img, cfg.deinterlace)
         if cfg.dead_pixel_threshold > 0:

@@ -16,29 +16,54 @@ HOG_KINDS = ("hog", "hog_soft")  # FHOG with hard or soft orientation bins
 FEATURE_KINDS = (*HOG_KINDS, "gray")
 
 
-def sample_patch(img: np.ndarray, box: Box, out_w: int, out_h: int) -> np.ndarray:
+def _blur_margin(sigma: float) -> int:
+    """Half width of the kernel cv2.GaussianBlur builds for a float image: ksize = round(8 sigma + 1) | 1."""
+    return (round(sigma * 8 + 1) | 1) // 2
+
+
+def sample_patch(
+    img: np.ndarray, box: Box, out_w: int, out_h: int, out: np.ndarray | None = None
+) -> np.ndarray:
     """Resample the image region `box` (may extend past the border) to out_h x out_w pixels.
 
     One affine warp maps the box onto the output grid with bilinear interpolation and replicated
     borders, so a crop partly outside the image is well defined and sub-pixel positions are kept.
+    `out`: optional (out_h, out_w) array of img's dtype written in place (no per-window allocation).
     """
     sx = box.w / out_w
     sy = box.h / out_h
     # output pixel (u, v) centre samples source point (x + (u + 0.5) * sx - 0.5, ...)
-    M = np.array([[sx, 0.0, box.x + 0.5 * sx - 0.5], [0.0, sy, box.y + 0.5 * sy - 0.5]], dtype=np.float64)
+    x0 = box.x + 0.5 * sx - 0.5
+    y0 = box.y + 0.5 * sy - 0.5
     interp = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+    src = img
     if sx > 2.0 or sy > 2.0:  # strong shrink: pre-filter to limit aliasing
-        k = max(sx, sy)
-        blurred = cv2.GaussianBlur(img, (0, 0), sigmaX=0.5 * k, borderType=cv2.BORDER_REPLICATE)
-        return cv2.warpAffine(blurred, M, (out_w, out_h), flags=interp, borderMode=cv2.BORDER_REPLICATE)
-    return cv2.warpAffine(img, M, (out_w, out_h), flags=interp, borderMode=cv2.BORDER_REPLICATE)
+        sigma = 0.5 * max(sx, sy)
+        # Blur only the band of whole rows the warp reads (clamped into the frame, as the replicated
+        # border does) plus the kernel half width k: bit for bit the values of blurring the whole frame
+        # (full-width rows take the same code path; each band edge is the frame's own edge or k rows
+        # away from every row the warp samples).
+        k = _blur_margin(sigma)
+        ih = img.shape[0]
+        r0 = max(min(max(int(np.floor(y0)) - 1, 0), ih - 1) - k, 0)
+        r1 = min(min(max(int(np.ceil(y0 + out_h * sy)) + 1, 0), ih - 1) + k + 1, ih)
+        src = cv2.GaussianBlur(img[r0:r1], (0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE)
+        y0 -= r0
+    M = np.array([[sx, 0.0, x0], [0.0, sy, y0]], dtype=np.float64)
+    return cv2.warpAffine(
+        src, M, (out_w, out_h), dst=out, flags=interp, borderMode=cv2.BORDER_REPLICATE
+    )
 
 
 def sample_patches(img: np.ndarray, boxes: Sequence[Box], out_w: int, out_h: int) -> np.ndarray:
     """Stack of `sample_patch` results, shape (N, out_h, out_w) float32."""
     out = np.empty((len(boxes), out_h, out_w), dtype=np.float32)
+    direct = img.dtype == np.float32 and img.ndim == 2
     for i, b in enumerate(boxes):  # one OpenCV call per window (N <= 9), never per pixel
-        out[i] = sample_patch(img, b, out_w, out_h)
+        if direct:
+            sample_patch(img, b, out_w, out_h, out=out[i])  # warped straight into the stack
+        else:
+            out[i] = sample_patch(img, b, out_w, out_h)
     return out
 
 

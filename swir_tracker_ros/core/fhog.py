@@ -1,5 +1,14 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Felzenszwalb HOG (FHOG, 31 channels) for a batch of equally sized patches, fully vectorised."""
+"""Felzenszwalb HOG (FHOG, 31 channels) for a batch of equally sized patches, from compiled primitives.
+
+Per frame the work is a handful of passes over the pixels, each one OpenCV or numpy call: `cv2.Sobel`
+gradients, `cv2.cartToPolar`, the orientation bins, ONE `np.add.at` that scatters every pixel into its
+2 orientation bins x 2 x cells, a row pooling over `cell` row phases, and the block normalisation on the
+(small) cell grid. Every pixel-sized array is a reused per-shape buffer (fresh multi-MB arrays cost a
+page fault per 4 kB; docs/speed.md). Everything is float32 except the scatter's float64 weights and sums,
+which reproduce the replaced `np.bincount` exactly. That implementation is kept in
+test/fhog_reference.py; test/test_core_fhog.py pins bit-identical results on real frames.
+"""
 
 from __future__ import annotations
 
@@ -9,133 +18,197 @@ import cv2
 import numpy as np
 
 N_ORIENT = 9  # contrast-insensitive orientations; 2 * N_ORIENT contrast-sensitive bins
+N_BINS = 2 * N_ORIENT
 N_CHANNELS = 3 * N_ORIENT + 4  # 18 sensitive + 9 insensitive + 4 texture = 31
 CLIP = 0.2
 TEXTURE_WEIGHT = 0.2357  # 1 / sqrt(18), as in Felzenszwalb et al. and Dollar's fhog
+_BIN_SCALE = np.float32(N_BINS / (2.0 * np.pi))  # radians -> orientation bin units
 
 
 @lru_cache(maxsize=32)
-def _axis_plan(n: int, cell: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _axis_plan(n: int, cell: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Bilinear pixel -> cell weights along one axis.
 
     A pixel at coordinate x sits at cell coordinate c = (x + 0.5) / cell - 0.5 and contributes to cells
     floor(c) and floor(c) + 1 with weights 1 - d and d (d = c - floor(c)); contributions outside the
-    grid are dropped. Returns (i0, i1, w0, w1, A) with A the dense (n_cells, n) interpolation matrix.
+    grid are dropped (weight 0, index clipped). Returns (i0, i1, w0, w1).
     """
     nc = n // cell
     c = (np.arange(n, dtype=np.float64) + 0.5) / cell - 0.5
-    c0 = np.floor(c).astype(np.int64)
+    c0 = np.floor(c).astype(np.intp)
     d = c - c0
     i0, i1 = c0, c0 + 1
     w0 = np.where((i0 >= 0) & (i0 < nc), 1.0 - d, 0.0)
     w1 = np.where((i1 >= 0) & (i1 < nc), d, 0.0)
-    i0, i1 = np.clip(i0, 0, nc - 1), np.clip(i1, 0, nc - 1)
-    A = np.zeros((nc, n), dtype=np.float32)
-    np.add.at(A, (i0, np.arange(n)), w0)
-    np.add.at(A, (i1, np.arange(n)), w1)
-    return i0, i1, w0.astype(np.float32), w1.astype(np.float32), A
-
-
-def gradients(patches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Magnitude and orientation in [0, 2 pi) of [-1, 0, 1] gradients; one-sided differences at the border."""
-    p = patches
-    gx = np.empty_like(p)
-    gy = np.empty_like(p)
-    gx[:, :, 1:-1] = (p[:, :, 2:] - p[:, :, :-2]) * 0.5
-    gx[:, :, 0] = p[:, :, 1] - p[:, :, 0]
-    gx[:, :, -1] = p[:, :, -1] - p[:, :, -2]
-    gy[:, 1:-1, :] = (p[:, 2:, :] - p[:, :-2, :]) * 0.5
-    gy[:, 0, :] = p[:, 1, :] - p[:, 0, :]
-    gy[:, -1, :] = p[:, -1, :] - p[:, -2, :]
-    n, h, w = p.shape
-    mag, ang = cv2.cartToPolar(gx.reshape(n * h, w), gy.reshape(n * h, w))
-    return mag.reshape(n, h, w), ang.reshape(n, h, w)
-
-
-def _orientation_bins(ang: np.ndarray, soft: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Orientation bins among the 18 contrast-sensitive ones (centres at multiples of 20 degrees): the
-    lower bin ob0, the upper bin ob1 and the weight od of the upper one (1 - od for the lower).
-
-    soft: the two nearest bins share the gradient linearly (Piotr's fhog, softBin = -1); hard: the whole
-    gradient goes to the nearest bin (od = 0).
-    """
-    nb = 2 * N_ORIENT
-    o = ang * np.float32(nb / (2.0 * np.pi))
-    if soft:
-        ob0 = o.astype(np.intp)  # floor, o >= 0
-        od = o - ob0.astype(np.float32)
-    else:
-        ob0 = np.rint(o).astype(np.intp)
-        od = np.zeros_like(o)
-    ob0[ob0 >= nb] -= nb
-    ob1 = ob0 + 1
-    ob1[ob1 >= nb] = 0
-    return ob0, ob1, od
+    return np.clip(i0, 0, nc - 1), np.clip(i1, 0, nc - 1), w0.astype(np.float32), w1.astype(np.float32)
 
 
 @lru_cache(maxsize=32)
 def _hist_plan(n: int, h: int, w: int, cell: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per-pixel flat indices of its two x cells in a channel-first (18, n*h, wc) accumulator, and the
-    two bilinear x weights (the orientation offset bin * n*h*wc is added per frame)."""
-    x0, x1, wx0, wx1, _ = _axis_plan(w, cell)
+    """Flat accumulator index of each pixel's two x cells in the channel-LAST (n*h, wc, 18) layout
+    (the orientation bin is added per frame), and the two bilinear x weights.
+
+    Bin-innermost keeps the scatter of one pixel row inside wc * 18 neighbouring accumulator entries.
+    """
+    x0, x1, wx0, wx1 = _axis_plan(w, cell)
     wc = w // cell
     rows = (np.arange(n * h, dtype=np.intp) * wc).reshape(n, h, 1)
-    return rows + x0[None, None, :], rows + x1[None, None, :], wx0, wx1
+    return (rows + x0) * N_BINS, (rows + x1) * N_BINS, wx0, wx1
 
 
-def orientation_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
-    """Gradient histograms, channel first (18, N, hc, wc): hard or soft orientation bins
-    (`_orientation_bins`), bilinear spatial cells.
+class _Workspace:
+    """Per-shape buffers of `cell_histograms`, reused from frame to frame (a fresh multi-MB array costs
+    page faults on every call: measured 10 of 16 ms a call on the development machine, docs/speed.md)."""
 
-    One `np.bincount` (4 entries a pixel: 2 orientation bins x 2 x cells) accumulates straight into the
-    channel-first layout the normalisation uses, then `cell` vectorised row passes do the y interpolation.
-    (An 18-plane scatter + `cv2.filter2D` variant gave the same numbers but was ~50 % slower here.)
+    def __init__(self, n: int, h: int, w: int, cell: int = 0) -> None:
+        """Buffers for N patches of H x W pixels; with cell > 0 also the scatter buffers."""
+        npx = n * h * w
+        if cell > 0:
+            self.index = np.empty(4 * npx, dtype=np.intp)
+            self.weight = np.empty(4 * npx, dtype=np.float64)  # = acc's dtype: ufunc.at's fast loop
+            self.acc = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float64)
+            self.acc32 = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float32)
+        shape = (n * h, w)
+        self.gx, self.gy, self.mag, self.ang, self.o, self.m0, self.m1 = (
+            np.empty(shape, dtype=np.float32) for _ in range(7)
+        )
+        self.ob0, self.ob1 = np.empty(shape, dtype=np.intp), np.empty(shape, dtype=np.intp)
+
+
+@lru_cache(maxsize=16)
+def _workspace(n: int, h: int, w: int, cell: int) -> _Workspace:
+    return _Workspace(n, h, w, cell)
+
+
+def gradients(patches: np.ndarray, ws: _Workspace | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Magnitude and orientation in [0, 2 pi) of [-1, 0, 1] / 2 gradients; one-sided differences at the
+    border (float32 (N, H, W) -> two float32 (N, H, W); written into `ws`'s buffers when given).
+
+    `cv2.Sobel` with ksize 1 is the plain central difference; the patches are stacked into one image, so
+    the border rows and columns (replicated or taken from the neighbouring patch) are overwritten with the
+    one-sided differences afterwards.
     """
     n, h, w = patches.shape
-    mag, ang = gradients(patches)
-    nb = 2 * N_ORIENT
-    ob0, ob1, od = _orientation_bins(ang, soft)
-    m1 = mag * od
-    m0 = mag - m1
-    hc, wc = h // cell, w // cell
-    c0, c1, wx0, wx1 = _hist_plan(n, h, w, cell)
-    plane = n * h * wc
-    ob0 *= plane
-    ob1 *= plane
-    npx = n * h * w
-    index = np.empty(4 * npx, dtype=np.intp)
-    weight = np.empty(4 * npx, dtype=np.float64)
-    for q, (cx, ob, wx, m) in enumerate(((c0, ob0, wx0, m0), (c1, ob0, wx1, m0), (c0, ob1, wx0, m1),
-                                         (c1, ob1, wx1, m1))):  # 4 vectorised passes
-        np.add(cx, ob, out=index[q * npx : (q + 1) * npx].reshape(n, h, w))
-        np.multiply(m, wx, out=weight[q * npx : (q + 1) * npx].reshape(n, h, w))
-    hx = np.bincount(index, weights=weight, minlength=nb * plane).astype(np.float32)
-    return _pool_rows(hx.reshape(nb * n, h, wc), cell).reshape(nb, n, hc, wc)
+    if ws is None:
+        ws = _Workspace(n, h, w)
+    flat = patches.reshape(n * h, w)
+    gx = cv2.Sobel(flat, cv2.CV_32F, 1, 0, dst=ws.gx, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+    gy = cv2.Sobel(flat, cv2.CV_32F, 0, 1, dst=ws.gy, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+    gx3, gy3 = gx.reshape(n, h, w), gy.reshape(n, h, w)
+    np.subtract(patches[:, :, 1], patches[:, :, 0], out=gx3[:, :, 0])
+    np.subtract(patches[:, :, -1], patches[:, :, -2], out=gx3[:, :, -1])
+    np.subtract(patches[:, 1, :], patches[:, 0, :], out=gy3[:, 0, :])
+    np.subtract(patches[:, -1, :], patches[:, -2, :], out=gy3[:, -1, :])
+    mag, ang = cv2.cartToPolar(gx, gy, magnitude=ws.mag, angle=ws.ang)
+    return mag.reshape(n, h, w), ang.reshape(n, h, w)
 
 
-def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
-    """`orientation_histograms` as (N, hc, wc, 18) (a view)."""
-    return np.moveaxis(orientation_histograms(patches, cell, soft), 0, -1)
+def _orientation_bins(
+    ang: np.ndarray, soft: bool, ws: _Workspace | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Orientation bins among the 18 contrast-sensitive ones (centres at multiples of 20 degrees): the
+    lower bin ob0, the upper bin ob1 and the weight od of the upper one (1 - od for the lower; None for
+    hard bins).
+
+    soft: the two nearest bins share the gradient linearly (Piotr's fhog, softBin = -1); hard: the whole
+    gradient goes to the nearest bin.
+    """
+    if ws is None:
+        ws = _Workspace(1, 1, ang.size)
+    shape = ang.shape
+    o, ob0, ob1 = ws.o.reshape(shape), ws.ob0.reshape(shape), ws.ob1.reshape(shape)
+    np.multiply(ang, _BIN_SCALE, out=o)
+    od = None
+    lower = ws.m0.reshape(shape)  # scratch
+    if soft:
+        np.floor(o, out=lower)
+        od = np.subtract(o, lower, out=ws.m1.reshape(shape))
+    else:
+        np.rint(o, out=lower)
+    np.copyto(ob1, lower, casting="unsafe")  # raw bin 0..18 (o = 18 only at exactly 2 pi)
+    np.take(_LOWER, ob1, out=ob0, mode="clip")  # bin 18 is bin 0 (clip: unbuffered, values are 0..18)
+    np.take(_UPPER, ob1, out=ob1, mode="clip")  # the next bin, cyclic
+    return ob0, ob1, od
+
+
+_LOWER = np.array([*range(N_BINS), 0], dtype=np.intp)
+_UPPER = np.array([*range(1, N_BINS), 0, 1], dtype=np.intp)
 
 
 def _pool_rows(hx: np.ndarray, cell: int) -> np.ndarray:
-    """Bilinear pooling of pixel rows (n, h, k) into cell rows (n, h // cell, k).
+    """Bilinear pooling of pixel rows (n, h, k) into cell rows (n, h // cell, k), float32.
 
     Row r + cell * i sits at cell coordinate i + (r + 0.5) / cell - 0.5: it gives weight 1 - |d| to cell i
     and |d| to the neighbour on the side of d (dropped at the grid border). One pass per row offset r.
+    Rows past the last whole cell (h not a multiple of `cell`) are dropped, as in the reference.
     """
     n, h, k = hx.shape
     hc = h // cell
     out = np.zeros((n, hc, k), dtype=np.float32)
+    t = np.empty((n, hc, k), dtype=np.float32)
     for r in range(cell):  # `cell` (4) vectorised passes, not a loop over pixels
         rows = hx[:, r : r + cell * hc : cell]
         d = (r + 0.5) / cell - 0.5
-        out += np.float32(1.0 - abs(d)) * rows
+        np.multiply(rows, np.float32(1.0 - abs(d)), out=t)
+        out += t
         if d < 0:  # also feeds the cell above
-            out[:, :-1] += np.float32(-d) * rows[:, 1:]
+            np.multiply(rows[:, 1:], np.float32(-d), out=t[:, :-1])
+            out[:, :-1] += t[:, :-1]
         elif d > 0:  # also feeds the cell below
-            out[:, 1:] += np.float32(d) * rows[:, :-1]
+            np.multiply(rows[:, :-1], np.float32(d), out=t[:, 1:])
+            out[:, 1:] += t[:, 1:]
     return out
+
+
+def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
+    """Gradient histograms (N, hc, wc, 18) float32: hard or soft orientation bins (`_orientation_bins`),
+    bilinear spatial cells.
+
+    One scatter-add (`np.add.at`, 4 entries a pixel: 2 orientation bins x 2 x cells; 2 with hard bins)
+    accumulates straight into a reused bin-innermost (N*H, wc, 18) float64 buffer, then `cell` vectorised
+    row passes do the y interpolation. Measured under OpenCV 4.14 (docs/speed.md): 18 per-bin planes
+    pooled by `cv2.sepFilter2D` take ~3x longer; the old `np.bincount` is as fast in a warm process but
+    allocates its multi-MB output (page faults) on every call.
+    """
+    if patches.ndim == 2:
+        patches = patches[None]
+    patches = np.ascontiguousarray(patches, dtype=np.float32)
+    n, h, w = patches.shape
+    ws = _workspace(n, h, w, cell)
+    mag, ang = gradients(patches, ws)
+    ob0, ob1, od = _orientation_bins(ang, soft, ws)
+    hc, wc = h // cell, w // cell
+    c0, c1, wx0, wx1 = _hist_plan(n, h, w, cell)
+    npx = n * h * w
+    if od is None:  # hard bins: 2 entries a pixel (the upper bin's weight would be 0)
+        parts = ((c0, ob0, wx0, mag), (c1, ob0, wx1, mag))
+    else:
+        m1 = np.multiply(mag, od, out=od)  # od's buffer is m1
+        m0 = np.subtract(mag, m1, out=ws.m0.reshape(n, h, w))
+        parts = ((c0, ob0, wx0, m0), (c1, ob0, wx1, m0), (c0, ob1, wx0, m1), (c1, ob1, wx1, m1))
+    k = len(parts) * npx
+    index, weight = ws.index[:k], ws.weight[:k]
+    for q, (cx, ob, wx, m) in enumerate(parts):  # 2 or 4 vectorised passes
+        np.add(cx, ob, out=index[q * npx : (q + 1) * npx].reshape(n, h, w))
+        np.multiply(m, wx, out=weight[q * npx : (q + 1) * npx].reshape(n, h, w))
+    acc = ws.acc
+    acc.fill(0.0)
+    # float64 sums in the reference's order (pass q, then pixel order): the bincount's exact numbers
+    np.add.at(acc, index, weight)
+    acc32 = ws.acc32
+    np.copyto(acc32, acc, casting="same_kind")
+    return _pool_rows(acc32.reshape(n, h, wc * N_BINS), cell).reshape(n, hc, wc, N_BINS)
+
+
+def orientation_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
+    """`cell_histograms` channel first, (18, N, hc, wc) (a view)."""
+    return np.moveaxis(cell_histograms(patches, cell, soft), -1, 0)
+
+
+@lru_cache(maxsize=16)
+def _norm_buffers(n: int, hc: int, wc: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two reused (27, n, hc, wc) float32 buffers of the block normalisation."""
+    return tuple(np.empty((3 * N_ORIENT, n, hc, wc), dtype=np.float32) for _ in range(2))
 
 
 def fhog(patches: np.ndarray, cell: int = 4, soft: bool = False) -> np.ndarray:
@@ -145,14 +218,11 @@ def fhog(patches: np.ndarray, cell: int = 4, soft: bool = False) -> np.ndarray:
     its 4 block-normalised and 0.2-truncated values, then 4 texture (gradient energy) channels, one per
     normalisation block (Felzenszwalb et al., TPAMI 2010, Sec. 6; the variant used by KCF).
     """
-    if patches.ndim == 2:
-        patches = patches[None]
-    patches = np.ascontiguousarray(patches, dtype=np.float32)
-    hist = orientation_histograms(patches, cell, soft)  # (18, n, hc, wc)
-    _, n, hc, wc = hist.shape
-    both = np.empty((3 * N_ORIENT, n, hc, wc), dtype=np.float32)  # 18 sensitive + 9 insensitive
-    both[: 2 * N_ORIENT] = hist
-    insens = np.add(hist[:N_ORIENT], hist[N_ORIENT:], out=both[2 * N_ORIENT :])
+    hist = cell_histograms(patches, cell, soft)  # (n, hc, wc, 18)
+    n, hc, wc, _ = hist.shape
+    both, t = _norm_buffers(n, hc, wc)  # 18 sensitive + 9 insensitive orientation channels
+    both[:N_BINS] = np.moveaxis(hist, -1, 0)  # channel first: long inner loops below
+    insens = np.add(both[:N_ORIENT], both[N_ORIENT:N_BINS], out=both[N_BINS:])
     energy = np.einsum("knij,knij->nij", insens, insens)
     e = np.empty((n, hc + 2, wc + 2), dtype=np.float32)  # edge-replicated border of one cell
     e[:, 1:-1, 1:-1] = energy
@@ -161,14 +231,17 @@ def fhog(patches: np.ndarray, cell: int = 4, soft: bool = False) -> np.ndarray:
     # sum of each 2x2 block of (padded) cells; block (i, j) covers padded cells i..i+1, j..j+1
     blocks = e[:, :-1, :-1] + e[:, 1:, :-1] + e[:, :-1, 1:] + e[:, 1:, 1:]  # (n, hc+1, wc+1)
     inv = 1.0 / np.sqrt(blocks + np.float32(1e-4 / (4.0 * cell**4 * 2.0)))
-    out = np.zeros((n, N_CHANNELS, hc, wc), dtype=np.float32)
+    out = np.empty((n, N_CHANNELS, hc, wc), dtype=np.float32)
     orient = np.moveaxis(out[:, : 3 * N_ORIENT], 1, 0)  # (27, n, hc, wc) view
     clip = np.float32(CLIP)
-    t = np.empty_like(both)
     for q, norm in enumerate((inv[:, :-1, :-1], inv[:, :-1, 1:], inv[:, 1:, :-1], inv[:, 1:, 1:])):
         np.multiply(both, norm, out=t)  # the 4 normalisation blocks around each cell
         np.minimum(t, clip, out=t)
-        orient += t
-        out[:, 3 * N_ORIENT + q] = t[: 2 * N_ORIENT].sum(axis=0) * np.float32(TEXTURE_WEIGHT)
+        if q == 0:
+            orient[...] = t
+        else:
+            orient += t
+        np.sum(t[:N_BINS], axis=0, out=out[:, 3 * N_ORIENT + q])
+        out[:, 3 * N_ORIENT + q] *= np.float32(TEXTURE_WEIGHT)
     orient *= np.float32(0.5)
     return out
