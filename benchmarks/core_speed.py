@@ -70,7 +70,9 @@ def time_ours(frames: np.ndarray, occlusion: bool) -> tuple[float, float, float]
     from swir_tracker_ros.types import Box, SearchMode
 
     # occlusion mode: a PSR threshold no response reaches forces the 3x3 grid on every frame
-    params = TrackerParams(psr_threshold=100.0, max_occluded_frames=100000) if occlusion else TrackerParams()
+    params = TrackerParams(max_occluded_frames=100000) if occlusion else TrackerParams()
+    if occlusion:
+        params.kcf.psr_threshold = 100.0  # every frame fails: the 3x3 re-detection path
     trk = Tracker(params)
     trk.init(frames[0], Box(*BOX))
     want = SearchMode.MULTI_WINDOW if occlusion else SearchMode.NORMAL
