@@ -145,7 +145,8 @@ def sre_box(box: Box, perturbation: str, width: int, height: int, style: str = "
     by ceil(0.1 w) / ceil(0.1 h); the 4 corner shifts move ONE corner outwards by round(0.1 w), round(0.1 h)
     with the opposite corner fixed (the box grows by ~10 % per axis); the scales keep the centre and round
     x, y, w, h. style "shift" reads the paper literally: the whole box moves by (+-0.1 w, +-0.1 h) in 8
-    directions, without rounding. Both clip the box to the image as the toolkit does.
+    directions, without rounding. Both clip as the toolkit does: a negative x or y becomes 0 with the size
+    kept (the box moves), then a box reaching past the right or bottom edge is cut there.
     """
     if style not in SRE_STYLES:
         raise ValueError(f"SRE style {style!r}; choose from {', '.join(SRE_STYLES)}")
@@ -215,8 +216,9 @@ def occlusion_episodes(occlusion: Sequence[float | None], fps: float, hidden_abo
                        min_s: float = MIN_EPISODE_S) -> list[tuple[int, int]]:
     """(first, last) frame of each occlusion episode: runs of frames whose covered share of the in-image
     silhouette exceeds `hidden_above`, gaps up to `min_s` merged, episodes shorter than `min_s` dropped.
-    Frames with no value (target out of view) are not hidden. An episode still going on at the last frame
-    is left out (the tracker had no chance to re-acquire). Same rules as demo/analysis.occlusion_episodes.
+    Frames with no value (target out of view) are not hidden. An episode still going on at the last frame,
+    or followed by the target out of view, is left out (the target never showed again to be re-acquired).
+    The same rules as demo/analysis.occlusion_episodes, on the covered share instead of the visible one.
     """
     hidden = [k for k, o in enumerate(occlusion) if o is not None and o > hidden_above]
     gap = max(1, round(min_s * fps))
@@ -226,7 +228,8 @@ def occlusion_episodes(occlusion: Sequence[float | None], fps: float, hidden_abo
             runs[-1][1] = k
         else:
             runs.append([k, k])
-    return [(a, b) for a, b in runs if b - a + 1 >= gap and b + 1 < len(occlusion)]
+    return [(a, b) for a, b in runs if b - a + 1 >= gap and b + 1 < len(occlusion)
+            and occlusion[b + 1] is not None]
 
 
 def occlusions_survived(episodes: Sequence[tuple[int, int]], states: Sequence[str],

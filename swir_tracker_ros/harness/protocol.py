@@ -79,8 +79,9 @@ class Task:
     opencv: str | None = None
 
     @property
-    def cost(self) -> int:
-        return _COST.get(self.peer or "ours", 1)
+    def order(self) -> tuple[int, int]:
+        """Real sequences first, then the slowest trackers first (better packing on --jobs)."""
+        return (self.source.kind == "synth", _COST.get(self.peer or "ours", 1))
 
 
 @dataclass
@@ -228,7 +229,7 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
     for src in sources:
         result.stats[src.name] = {t: {} for t in result.trackers}
         result.kinds[src.name] = "synth" if src.kind == "synth" else "real"
-    tasks.sort(key=lambda t: t.cost)
+    tasks.sort(key=lambda t: t.order)
 
     def take(r: TaskResult) -> None:
         result.stats[r.sequence][r.label] = r.stats
