@@ -309,3 +309,19 @@ def test_clutter_scenario_reacquires_the_target_not_the_look_alike() -> None:
     assert any(r.state is TrackState.OCCLUDED for r in res[120:140])  # the pole is detected
     after = [res[k - 1].box.iou(gts[k]) for k in range(150, len(frames))]
     assert min(after) > 0.5
+
+
+def test_frames_argument_advances_the_prediction_over_skipped_frames() -> None:
+    """`update(..., frames=k)` (core_contract.md item 3): after frames were skipped the search starts at the
+    position the velocity reaches in k periods, not one period ahead."""
+    frames, gts, _ = occlusion_scene(40)
+    starts = {}
+    for k in (1.0, 4.0):
+        trk = Tracker(TrackerParams(variant="kalman"))
+        trk.init(frames[0], gts[0])
+        for f in frames[1:20]:  # 2 px/frame to the right, velocity learnt
+            trk.update(f)
+        res = trk.update(frames[23], frames=k)  # frames 20..22 skipped
+        starts[k] = res.search_windows[0].cx if res.search_mode is SearchMode.NORMAL else res.box.cx
+    truth = gts[23].cx
+    assert abs(starts[4.0] - truth) < 2.0 < abs(starts[1.0] - truth)

@@ -36,8 +36,26 @@ class KCFFilter(BaseFilter):
     def failed(self, det: Detection) -> bool:
         return det.psr < self.fp.psr_threshold
 
+    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+        super().__init__(p, w, h)
+        self._peak_sum = self._apce_sum = 0.0
+        self._n = 0
+
     def confident(self, det: Detection) -> bool:
-        return det.peak > self.fp.update_peak_threshold
+        """Gate `peak`: peak > 0.5 (paper 000). Gate `lmcf` (Wang et al., CVPR 2017, eq. 12): peak >=
+        beta1 x mean peak and APCE >= beta2 x mean APCE, the means over the frames that updated."""
+        fp = self.fp
+        if fp.update_gate == "peak":
+            return det.peak > fp.update_peak_threshold
+        ok = self._n == 0 or (
+            det.peak >= fp.lmcf_peak_ratio * self._peak_sum / self._n
+            and det.apce >= fp.lmcf_apce_ratio * self._apce_sum / self._n
+        )
+        if ok:
+            self._peak_sum += det.peak
+            self._apce_sum += det.apce
+            self._n += 1
+        return ok
 
     def box_model(self, w: float, h: float) -> BoxModel:
         return kcf_box_model()

@@ -15,7 +15,7 @@ from swir_tracker_ros.kalman.influence import HUBER_K
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 
-VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r")
+VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r", "measured")
 PIPELINES = ("kcf", "dcf_ca")
 
 
@@ -27,10 +27,12 @@ class TrackerParams:
     """
 
     variant: str = _f(
-        "robust_adaptive",
+        "measured",
         "cf: base filter only; kalman: standard KF + 9 windows + scale + gated "
         "update; robust: Huber k=1.5; robust_adaptive: k from the peak (paper 000 eq. 38 / "
-        "dissertation eq. 6.9); robust_adaptive_r: plus adaptive R (dissertation eq. 5.95)",
+        "dissertation eq. 6.9); robust_adaptive_r: plus adaptive R (dissertation eq. 5.95); measured "
+        "(ours, default: best OPE on the real set): kalman, but a confident frame reports and searches from "
+        "the correlation peak itself, the Kalman filter only carries the velocity and the re-detection",
         choices=VARIANTS,
     )
     pipeline: str = _f(
@@ -73,6 +75,13 @@ class TrackerParams:
         False,
         "also search the 5 scales in each of the 9 windows (paper 000 text); "
         "off: KF size during re-detection (dissertation), 5x cheaper",
+    )
+    redetect_peak_ratio: float = _f(
+        0.0,
+        "(ours) while re-detecting, a peak in a window away from the prediction is a measurement only when "
+        "it reaches this ratio of the mean peak of the tracked frames (otherwise the filter coasts); 0: off",
+        0.0,
+        2.0,
     )
     max_occluded_frames: int = _f(
         150, "(ours) frames in re-detection before the state becomes lost", 1, 100000

@@ -10,12 +10,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
 from ..errors import HarnessError, SwirTrackerError
 from ..types import Box, TrackState
 from .metrics import Score, mean_scores, score, sre_box
 from .sources import Source
 
-VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r")
 SUMMARY_FIELDS = ("precision_20", "success_auc", "center_error", "lost_frames", "fps")
 
 
