@@ -92,6 +92,8 @@ class Tracker:
         self._frame_shape: tuple[int, ...] = ()
         self._occluded = 0
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
+        self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
+        self._memory = False
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -116,6 +118,9 @@ class Tracker:
         self._init_size = (b.w, b.h)
         self._bank = make_filter(p, b.w, b.h)  # the pipeline's base tracker, selected once
         self._bank.initialise(img, b)
+        self._memory = p.memory_ratio > 0.0 and p.variant == "measured"  # the papers' variants: none
+        if self._memory:
+            self._bank.start_memory()
         self._box = b
         if p.variant != "cf":
             self._model = self._bank.box_model(b.w, b.h)
@@ -244,8 +249,9 @@ class Tracker:
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
         self._box = self._clamp_size(out)
-        updated = self._maybe_train(img, det, failed)
-        if failed:
+        rejected = not failed and not self._verified(img, best)
+        updated = self._maybe_train(img, det, failed or rejected)
+        if failed or rejected:
             self._occluded += 1
             state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
         else:
@@ -319,6 +325,27 @@ class Tracker:
         info = kf.update(z, threshold=k)
         kf.x[self._centre_rates] = held
         return info
+
+    def _verified(self, img: np.ndarray, index: int) -> bool:
+        """Long-term memory check of a non-failed frame (LCT, Ma et al. CVPR 2015 Sec. 3.3; ours here).
+
+        The memory filter (first-frame model, then learnt at `memory_rate` only from frames it scores
+        above its own mean) must find the target in the winning window with a peak of at least
+        `memory_ratio` x its mean over the verified frames; otherwise the box is on something the memory
+        does not know (background, a distractor) and the frame is `occluded`, not `tracking`.
+        """
+        p, bank = self.params, self._bank
+        if not self._memory:
+            return True
+        m = bank.memory_score(index)
+        mean = self._mem_sum / self._mem_n if self._mem_n else m
+        if m < p.memory_ratio * mean:
+            return False
+        self._mem_sum += m
+        self._mem_n += 1
+        if m >= mean and p.memory_rate > 0.0:
+            bank.train_memory(img, self._box, p.memory_rate)
+        return True
 
     def _failure(self, det: Detection) -> bool:
         """Failure detection of the pipeline: PSR < 7 (paper 000) or APCE <= 0.6 x mean APCE (eq. 4.96)."""

@@ -8,6 +8,7 @@ gate, its peak -> Huber threshold map and its Kalman box model. `Tracker` select
 
 from __future__ import annotations
 
+import copy
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
@@ -162,8 +163,34 @@ class BaseFilter(ABC):
         scales: Sequence[float] | None = None,
     ) -> list[Detection]:
         """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
-        responses = self.filter.respond(self.features(img, windows))
+        feats = self.features(img, windows)
+        self._last_features = feats  # for `memory_score` of the winner (no second feature computation)
+        responses = self.filter.respond(feats)
         return self._detections(responses, windows, scales if scales is not None else [1.0] * len(windows))
+
+    # ------------------------------------------------------------------ long-term memory (LCT style)
+    def start_memory(self) -> None:
+        """Keep a copy of the first-frame filter as the long-term memory of the target.
+
+        Ma et al., "Long-term correlation tracking", CVPR 2015, Sec. 3.2-3.3: a second, conservatively
+        learnt filter whose response measures the confidence of the tracked box; it learns only from
+        frames it finds confident (their eq. 7 threshold), so that a drifting short-term filter cannot
+        teach it the background. Here it verifies every `tracking` frame (core_contract.md item 3).
+        """
+        self.memory = copy.deepcopy(self.filter)
+
+    def memory_score(self, index: int) -> float:
+        """Peak of the memory filter's response on window `index` of the last `detect` call."""
+        resp = self.memory.respond(self._last_features[index : index + 1])[0]
+        return float(resp.max()) * self.gain
+
+    def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Blend the memory with the window around `box` at the (small) rate `rate`."""
+        self.filter, self.memory = self.memory, self.filter
+        try:
+            self.train(img, box, rate)
+        finally:
+            self.filter, self.memory = self.memory, self.filter
 
     def _detections(
         self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]

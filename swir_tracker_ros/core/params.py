@@ -83,6 +83,18 @@ class TrackerParams:
         0.0,
         2.0,
     )
+    memory_ratio: float = _f(
+        0.5,
+        "(ours, variant measured; LCT-style memory, Ma et al. CVPR 2015) a frame is `tracking` only when "
+        "the long-term memory filter's peak on the box reaches this ratio of its mean over the verified "
+        "frames; a "
+        "rejected frame is `occluded` and teaches neither filter; 0: off (the papers)",
+        0.0,
+        2.0,
+    )
+    memory_rate: float = _f(
+        0.01, "(ours) learning rate of the memory on frames whose memory peak is above its mean", 0.0, 1.0
+    )
     max_occluded_frames: int = _f(
         150, "(ours) frames in re-detection before the state becomes lost", 1, 100000
     )
