@@ -103,7 +103,9 @@ def tracker_params(occlusion: bool):
     if not occlusion:
         return TrackerParams()
     # occlusion mode: a PSR threshold no response reaches forces the 3x3 grid (full re-detection) every frame
-    return TrackerParams(psr_threshold=100.0, max_occluded_frames=100000)
+    params = TrackerParams(max_occluded_frames=100000)
+    params.kcf.psr_threshold = 100.0
+    return params
 
 
 def time_ours(frames: np.ndarray, box: tuple[float, ...], occlusion: bool) -> dict:

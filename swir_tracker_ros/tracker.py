@@ -8,22 +8,18 @@ import math
 import cv2
 import numpy as np
 
+from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
-from swir_tracker_ros.core.detector import Detection, FilterBank
+from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.params import PIPELINES, VARIANTS, TrackerParams
 from swir_tracker_ros.core.windows import scale_windows, search_window
 from swir_tracker_ros.errors import KalmanError, TrackerError
 from swir_tracker_ros.kalman import (
-    DISSERTATION_DCFCA,
-    PAPER000_KCF,
     AdaptiveNoise,
     Huber,
     KalmanFilter,
     RobustKalmanFilter,
-    ThresholdMap,
     UpdateInfo,
-    dcfca_box_model,
-    kcf_box_model,
 )
 from swir_tracker_ros.types import Box, SearchMode, TrackResult, TrackState
 
@@ -53,7 +49,10 @@ class Tracker:
     5-scale search at the prediction, failure detection (PSR < 7 for KCF, APCE <= 0.6 mean for DCF-CA),
     3x3 re-detection grid on failure, robust Kalman update with a peak-adaptive Huber threshold (the
     motion held while re-detecting, `_redetection_update`), and a model update only on confident frames.
-    Variant `cf` is the bare correlation filter.
+    Variant `cf` is the bare correlation filter. Variant `measured` (ours, the default) is `kalman`
+    (standard Kalman filter, no Huber clipping) whose confident frames report the correlation peak itself:
+    on the real sequences the clipped robust update (eq. 33-35 with eq. 38's k = 0.1-0.4 at the low peaks
+    of a changing target) lags fast true motion until the window loses the target (surfer, girl, skating1).
     """
 
     def __init__(self, params: TrackerParams | None = None) -> None:
@@ -82,7 +81,7 @@ class Tracker:
         """Forget the target (state idle)."""
         self._state = TrackState.IDLE
         self._conditioner.reset()
-        self._bank: FilterBank | None = None
+        self._bank: BaseFilter | None = None
         self._kf: KalmanFilter | None = None
         self._model = None
         self._size_rates: list[int] = []
@@ -92,8 +91,9 @@ class Tracker:
         self._init_size = (0.0, 0.0)
         self._frame_shape: tuple[int, ...] = ()
         self._occluded = 0
-        self._apce_sum = self._apce_n = 0.0
-        self._apce_est_sum = self._apce_est_n = 0.0
+        self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
+        self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
+        self._memory = False
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -116,19 +116,20 @@ class Tracker:
         b = Box(box.x * ds, box.y * ds, box.w * ds, box.h * ds)
         self._frame_shape = frame.shape
         self._init_size = (b.w, b.h)
-        self._bank = FilterBank(p, b.w, b.h)
+        self._bank = make_filter(p, b.w, b.h)  # the pipeline's base tracker, selected once
         self._bank.initialise(img, b)
+        self._memory = p.memory_ratio > 0.0 and p.variant == "measured"  # the papers' variants: none
+        if self._memory:
+            self._bank.start_memory()
         self._box = b
         if p.variant != "cf":
-            self._model = kcf_box_model() if p.pipeline == "kcf" else dcfca_box_model(b.w, b.h)
+            self._model = self._bank.box_model(b.w, b.h)
             self._size_rates = [i for i, n in enumerate(self._model.names) if n in SIZE_RATES]
             self._centre_rates = [i for i, n in enumerate(self._model.names) if n in CENTRE_RATES]
-            if p.variant == "kalman":
+            if p.variant in ("kalman", "measured"):
                 self._kf = KalmanFilter(self._model)
             else:
-                method = (
-                    p.robust_method if p.robust_method != "auto" else ("A4" if p.pipeline == "kcf" else "A2")
-                )
+                method = p.robust_method if p.robust_method != "auto" else self._bank.robust_method
                 self._kf = RobustKalmanFilter(
                     self._model,
                     influence=Huber(p.fixed_huber_threshold),
@@ -141,9 +142,17 @@ class Tracker:
         self._state = TrackState.TRACKING
 
     def update(
-        self, frame: np.ndarray, ego_shift: tuple[float, float] = (0.0, 0.0), bit_depth: int | None = None
+        self,
+        frame: np.ndarray,
+        ego_shift: tuple[float, float] = (0.0, 0.0),
+        bit_depth: int | None = None,
+        frames: float = 1.0,
     ) -> TrackResult:
-        """Track one frame. Never raises on an ndarray: unusable input gives a `lost` result."""
+        """Track one frame. Never raises on an ndarray: unusable input gives a `lost` result.
+
+        `frames`: time since the previous update in frame periods (> 1 when frames were skipped); the
+        Kalman prediction advances by that many periods. A non-finite or non-positive value counts as 1.
+        """
         if self._state is TrackState.IDLE or self._bank is None or self._box is None:
             return TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
         if self._state is TrackState.LOST:
@@ -157,12 +166,15 @@ class Tracker:
             dx, dy = (float(v) for v in ego_shift)
             if not (math.isfinite(dx) and math.isfinite(dy)):
                 dx = dy = 0.0
+            frames = float(frames)
+            if not (math.isfinite(frames) and frames > 0.0):
+                frames = 1.0
         except (*_RECOVERABLE, TypeError):
             return self._result(self._box, TrackState.LOST)  # transient: the track itself is kept
         try:
             if self.params.variant == "cf":
                 return self._step_cf(img)
-            return self._step(img, dx * self.params.downscale, dy * self.params.downscale)
+            return self._step(img, dx * self.params.downscale, dy * self.params.downscale, frames)
         except _RECOVERABLE:
             self._state = TrackState.LOST
             return self._result(self._box, TrackState.LOST)
@@ -179,9 +191,9 @@ class Tracker:
             self._box, TrackState.TRACKING, det=det, measured=True, updated=True, windows=(win,)
         )
 
-    def _step(self, img: np.ndarray, dx: float, dy: float) -> TrackResult:
+    def _step(self, img: np.ndarray, dx: float, dy: float, frames: float = 1.0) -> TrackResult:
         p, bank, kf, model = self.params, self._bank, self._kf, self._model
-        kf.predict()
+        self._predict(frames)
         kf.x[0] += dx
         kf.x[1] += dy
         pred = model.box_from_state(kf.x)
@@ -229,19 +241,24 @@ class Tracker:
             info = self._redetection_update(z, k, det.peak, outer)
         else:
             info = kf.update(z, threshold=k)
+            if p.variant == "measured":
+                kf.x[:2] = z[:2]  # the confident correlation peak is the centre (no posterior lag)
         if self._noise is not None and not info.coasted:
             kf.R = self._noise.push(z, kf.x, kf.P, kf.H, used=info.used)
         out = model.box_from_state(kf.x)
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
         self._box = self._clamp_size(out)
-        updated = self._maybe_train(img, det, failed)
-        if failed:
+        rejected = not failed and not self._verified(img, best)
+        updated = self._maybe_train(img, det, failed or rejected)
+        if failed or rejected:
             self._occluded += 1
             state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
         else:
             self._occluded = 0
             state = TrackState.TRACKING
+            self._peak_sum += det.peak
+            self._peak_n += 1
         self._state = state
         return self._result(
             self._box,
@@ -255,6 +272,24 @@ class Tracker:
         )
 
     # ------------------------------------------------------------------ pieces
+    def _predict(self, frames: float) -> None:
+        """Kalman time update over `frames` frame periods (paper 000 eq. 14-15 with T = frames).
+
+        The box models are constant-velocity models with T = 1 frame (eq. 36, eq. 6.2), F = I + T A; for
+        T frames F_T = I + T A and, the process noise being a random walk per period, Q_T = T Q.
+        """
+        kf = self._kf
+        if frames == 1.0:
+            kf.predict()
+            return
+        F1, Q1 = kf.F, kf.Q
+        eye = np.eye(F1.shape[0])
+        kf.F, kf.Q = eye + frames * (F1 - eye), frames * Q1
+        try:
+            kf.predict()
+        finally:
+            kf.F, kf.Q = F1, Q1
+
     def _redetection_update(self, z: np.ndarray, k: float | None, peak: float, outer: bool) -> UpdateInfo:
         """Kalman update while re-detecting: the motion is held, outliers cannot steer it (ours).
 
@@ -280,50 +315,56 @@ class Tracker:
         """
         kf, p = self._kf, self.params
         adaptive = p.variant in ("robust_adaptive", "robust_adaptive_r")
-        if adaptive and outer and self._threshold_map().at_floor(peak):
+        if adaptive and outer and self._bank.threshold_map.at_floor(peak):
+            return kf.update(None, threshold=k)
+        # (ours) a jump to another window must look like the target did when it was tracked
+        weak = self._peak_n and peak < p.redetect_peak_ratio * self._peak_sum / self._peak_n
+        if outer and weak:
             return kf.update(None, threshold=k)
         held = kf.x[self._centre_rates].copy()
         info = kf.update(z, threshold=k)
         kf.x[self._centre_rates] = held
         return info
 
-    def _threshold_map(self) -> ThresholdMap:
-        return PAPER000_KCF if self.params.pipeline == "kcf" else DISSERTATION_DCFCA
+    def _verified(self, img: np.ndarray, index: int) -> bool:
+        """Long-term memory check of a non-failed frame (LCT, Ma et al. CVPR 2015 Sec. 3.3; ours here).
+
+        The memory filter (first-frame model, then learnt at `memory_rate` only from frames it scores
+        above its own mean) must find the target in the winning window with a peak of at least
+        `memory_ratio` x its mean over the verified frames; otherwise the box is on something the memory
+        does not know (background, a distractor) and the frame is `occluded`, not `tracking`.
+        """
+        p, bank = self.params, self._bank
+        if not self._memory:
+            return True
+        m = bank.memory_score(index)
+        mean = self._mem_sum / self._mem_n if self._mem_n else m
+        if m < p.memory_ratio * mean:
+            return False
+        self._mem_sum += m
+        self._mem_n += 1
+        if m >= mean and p.memory_rate > 0.0:
+            bank.train_memory(img, self._box, p.memory_rate)
+        return True
 
     def _failure(self, det: Detection) -> bool:
-        """Failure detection: PSR < threshold (paper 000) or APCE <= 0.6 x mean APCE (eq. 4.96)."""
-        p = self.params
-        if p.pipeline == "kcf":
-            return det.psr < p.psr_threshold
-        mean = self._apce_sum / self._apce_n if self._apce_n else 0.0
-        occluded = self._apce_n > 0 and det.apce <= p.apce_occlusion_ratio * mean
-        self._apce_sum += det.apce  # mean over every frame so far (the thesis does not say which frames)
-        self._apce_n += 1
-        return occluded
+        """Failure detection of the pipeline: PSR < 7 (paper 000) or APCE <= 0.6 x mean APCE (eq. 4.96)."""
+        return self._bank.failed(det)
 
     def _threshold(self, peak: float) -> float | None:
         v = self.params.variant
-        if v == "kalman":
+        if v in ("kalman", "measured"):
             return None
         if v == "robust":
             return self.params.fixed_huber_threshold
-        return self._threshold_map()(peak)
+        return self._bank.threshold_map(peak)
 
     def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
         """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure."""
-        p = self.params
-        if failed:
+        if failed or not self._bank.confident(det):
             return False
-        if p.pipeline == "kcf":
-            ok = det.peak > p.update_peak_threshold
-        else:
-            mean = self._apce_est_sum / self._apce_est_n if self._apce_est_n else 0.0
-            ok = self._apce_est_n == 0 or det.apce > p.apce_update_ratio * mean
-            self._apce_est_sum += det.apce
-            self._apce_est_n += 1
-        if ok:
-            self._bank.train(img, self._box, self._bank.learning_rate)
-        return ok
+        self._bank.train(img, self._box, self._bank.learning_rate)
+        return True
 
     def _clamp_size(self, box: Box) -> Box:
         """Keep the size within [1/4, 4] x the initial size so one bad scale step cannot run away."""

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -62,24 +63,32 @@ def test_dead_pixels_fields_and_downscale() -> None:
     assert small.shape == (50, 40)
 
 
-def test_tracker_params_are_flat_documented_and_validated() -> None:
+def test_tracker_params_are_documented_and_validated() -> None:
+    from swir_tracker_ros.core.dcf_ca import DCFCAParams
+    from swir_tracker_ros.core.kcf import KCFParams
+
     p = TrackerParams()
     p.validate()
-    for f in dataclasses.fields(p):
-        assert f.type in ("str", "int", "float", "bool", "list[float]"), f.name
-        assert f.metadata.get("doc"), f.name
-        if f.type == "str":
-            assert getattr(p, f.name) in f.metadata["choices"]
+    for cls in (TrackerParams, KCFParams, DCFCAParams):
+        for f in dataclasses.fields(cls):
+            assert f.type in ("str", "int", "float", "bool", "KCFParams", "DCFCAParams"), f.name
+            assert f.metadata.get("doc"), f.name
+            if f.type == "str":
+                assert f.default in f.metadata["choices"]
     assert p.scale_factors() == pytest.approx((0.90, 0.95, 1.0, 1.05, 1.10))
-    assert (p.kcf_padding, p.kcf_lambda, p.kcf_kernel_sigma, p.kcf_interp_factor) == (1.5, 1e-4, 0.5, 0.02)
-    assert (p.dcf_lambda1, p.dcf_lambda2, p.dcf_padding, p.dcf_interp_factor) == (1e-4, 25.0, 2.0, 0.015)
-    assert (p.psr_threshold, p.update_peak_threshold, p.apce_occlusion_ratio) == (7.0, 0.5, 0.6)
+    k, d = p.kcf, p.dcf_ca
+    assert (k.padding, k.lambda_, k.kernel_sigma, k.interp_factor) == (1.5, 1e-4, 0.5, 0.02)
+    assert (d.lambda1, d.lambda2, d.padding, d.interp_factor) == (1e-4, 25.0, 2.0, 0.015)
+    assert (k.psr_threshold, k.update_peak_threshold, d.apce_occlusion_ratio) == (7.0, 0.5, 0.6)
     for bad in (
         dict(variant="magic"),
-        dict(psr_threshold=-1.0),
+        dict(kcf=KCFParams(psr_threshold=-1.0)),
         dict(n_scales=4),
-        dict(kcf_padding="2"),
+        dict(kcf=KCFParams(padding="2")),
+        dict(dcf_ca=DCFCAParams(lambda2=math.nan)),
         dict(grid_scale_search=1),
     ):
         with pytest.raises(ParameterError):
             TrackerParams(**bad).validate()
+    with pytest.raises(ParameterError, match=r"kcf\.psr_threshold"):
+        TrackerParams(kcf=KCFParams(psr_threshold=-1.0)).validate()

@@ -53,7 +53,7 @@ def test_fhog_is_contrast_normalised_and_batched() -> None:
 @pytest.mark.parametrize(("feature", "tol"), [("gray", 0.15), ("hog", 0.6)])
 def test_kcf_recovers_subpixel_shift(feature: str, tol: float) -> None:
     img = textured(seed=1)
-    params = KCFParams() if feature == "hog" else KCFParams.gray()
+    params = KCFParams(feature="hog") if feature == "hog" else KCFParams.gray()
     box = Box(90, 80, 40, 32)
     win = search_window(box.cx, box.cy, box.w, box.h, params.padding)
     cell = params.cell_size
@@ -148,10 +148,10 @@ def test_filter_params_validate() -> None:
 
 
 def test_large_targets_are_tracked_at_half_resolution() -> None:
-    from swir_tracker_ros.core.detector import FilterBank
+    from swir_tracker_ros.core.filters import make_filter
     from swir_tracker_ros.core.params import TrackerParams
 
-    small, large = FilterBank(TrackerParams(), 40, 80), FilterBank(TrackerParams(), 100, 120)
+    small, large = make_filter(TrackerParams(), 40, 80), make_filter(TrackerParams(), 100, 120)
     assert small.model_scale == 1.0 and (small.tw, small.th) == (100, 200)
     assert large.model_scale == 0.5 and (large.tw, large.th) == (124, 152)  # 2.5 x box / 2, whole cells
 
@@ -183,11 +183,13 @@ def test_fhog_orientation_binning_hard_and_soft() -> None:
 def test_grid_features_cut_from_the_union_match_single_windows(feature: str) -> None:
     """The 3x3 grid's maps come from one feature computation on the union; away from the window borders
     (where FHOG's block normalisation sees different neighbours) they equal per-window features."""
-    from swir_tracker_ros.core.detector import FilterBank
+    from swir_tracker_ros.core.filters import make_filter
     from swir_tracker_ros.core.params import TrackerParams
 
     img = textured(300, 360, seed=4)
-    bank = FilterBank(TrackerParams(feature=feature), 22.0, 44.0)
+    params = TrackerParams()
+    params.kcf.feature = feature
+    bank = make_filter(params, 22.0, 44.0)
     window = search_window(181.3, 149.7, 22.0 * 1.04, 44.0 * 1.04, bank.padding)
     grid, wins = bank.grid_features(img, window, 1.0 / 3.0)
     assert len(wins) == 9 and wins[4] == window

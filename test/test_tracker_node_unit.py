@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import array
-import dataclasses
 import math
 from collections.abc import Iterator
 
@@ -26,6 +25,7 @@ from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import reported_publishers
+from swir_tracker_ros.nodes.ros_params import _construct
 from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode, params_yaml
 from swir_tracker_ros.nodes.tracker_node_params import (
     FORMAT_CHANGE_FRAMES,
@@ -33,6 +33,7 @@ from swir_tracker_ros.nodes.tracker_node_params import (
     HeadPoseHistory,
     TrackerNodeParams,
 )
+from swir_tracker_ros.paramfield import flat_fields
 from swir_tracker_ros.tracker import TrackerParams
 from swir_tracker_ros.types import TrackState
 
@@ -183,7 +184,7 @@ def test_runtime_parameter_changes(context: Context) -> None:
     node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
     try:
         feed(node, scene(100, 96), 1.0)
-        assert not node.set_parameters([Parameter("tracker.psr_threshold", value=-1.0)])[0].successful
+        assert not node.set_parameters([Parameter("tracker.kcf.psr_threshold", value=-1.0)])[0].successful
         res = node.set_parameters([Parameter("tracker.pipeline", value="nope")])[0]
         assert not res.successful and "nope" in res.reason
         assert not node.set_parameters([Parameter("init_box", value=[1.0, 2.0])])[0].successful
@@ -260,24 +261,33 @@ def test_debug_image_only_with_subscribers(context: Context) -> None:
 
 
 def test_params_file_and_docs_list_every_parameter() -> None:
-    """params/tracker.yaml declares exactly the node's and the core's parameters with valid values
-    (regenerate it with `tracker --params-yaml`), and docs/tracker_node.md documents each one."""
+    """params/tracker.yaml declares exactly the node's and the core's parameters (nested blocks for the
+    per-filter Params) with valid values (regenerate it with `tracker --params-yaml`), and
+    docs/tracker_node.md documents each one."""
     doc = yaml.safe_load((REPO / "params" / "tracker.yaml").read_text())["/**"]["ros__parameters"]
     core = doc.pop("tracker")
     docs = (REPO / "docs" / "tracker_node.md").read_text()
     for prefix, cls, values in (("", TrackerNodeParams, doc), ("tracker.", TrackerParams, core)):
-        names = {f.name for f in dataclasses.fields(cls)}
-        assert set(values) == names, f"{cls.__name__}: run `tracker --params-yaml > params/tracker.yaml`"
-        cls(**values).validate()
+        names = {name for name, _, _ in flat_fields(cls)}
+        hint = f"{cls.__name__}: run `tracker --params-yaml > params/tracker.yaml`"
+        assert set(_flatten(values)) == names, hint
+        _construct(cls, _flatten(values)).validate()
         missing = [n for n in names if f"`{prefix}{n}`" not in docs]
         assert not missing, f"docs/tracker_node.md lacks {missing}"
+
+
+def _flatten(values: dict, prefix: str = "") -> dict:
+    out: dict = {}
+    for k, v in values.items():
+        out.update(_flatten(v, f"{prefix}{k}.") if isinstance(v, dict) else {prefix + k: v})
+    return out
 
 
 def test_generated_params_yaml_loads_back_to_the_defaults() -> None:
     doc = yaml.safe_load(params_yaml())["/**"]["ros__parameters"]
     core = doc.pop("tracker")
     assert TrackerNodeParams(**doc) == TrackerNodeParams()
-    assert TrackerParams(**core) == TrackerParams()
+    assert _construct(TrackerParams, _flatten(core)) == TrackerParams()
 
 
 def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:

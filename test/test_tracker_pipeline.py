@@ -309,3 +309,54 @@ def test_clutter_scenario_reacquires_the_target_not_the_look_alike() -> None:
     assert any(r.state is TrackState.OCCLUDED for r in res[120:140])  # the pole is detected
     after = [res[k - 1].box.iou(gts[k]) for k in range(150, len(frames))]
     assert min(after) > 0.5
+
+
+def test_frames_argument_advances_the_prediction_over_skipped_frames() -> None:
+    """`update(..., frames=k)` (core_contract.md item 3): after frames were skipped the search starts at the
+    position the velocity reaches in k periods, not one period ahead."""
+    frames, gts, _ = occlusion_scene(40)
+    starts = {}
+    for k in (1.0, 4.0):
+        trk = Tracker(TrackerParams(variant="kalman"))
+        trk.init(frames[0], gts[0])
+        for f in frames[1:20]:  # 2 px/frame to the right, velocity learnt
+            trk.update(f)
+        res = trk.update(frames[23], frames=k)  # frames 20..22 skipped
+        starts[k] = res.search_windows[0].cx if res.search_mode is SearchMode.NORMAL else res.box.cx
+    truth = gts[23].cx
+    assert abs(starts[4.0] - truth) < 2.0 < abs(starts[1.0] - truth)
+
+
+def leaving_scene(seed: int, n: int = 80, gone: int = 30) -> tuple[list[np.ndarray], list[Box]]:
+    """A 20x40 textured target walks right at 2 px/frame over a textured background and is gone (left
+    the scene) from frame `gone` on; the background stays."""
+    rng = np.random.default_rng(seed)
+    bg = cv2.GaussianBlur(rng.random((240, 320)).astype(np.float32), (0, 0), 2)
+    bg = 0.3 + 0.4 * (bg - bg.min()) / (bg.max() - bg.min())
+    tgt = 0.1 + 0.9 * cv2.resize(
+        rng.random((8, 4)).astype(np.float32), (20, 40), interpolation=cv2.INTER_NEAREST
+    )
+    frames, gts = [], []
+    x, y = 60.0, 90.0
+    for k in range(n):
+        f = bg.copy()
+        if k < gone:
+            x += 2.0
+            f[round(y) : round(y) + 40, round(x) : round(x) + 20] = tgt
+        f = f + rng.normal(0, 0.01, f.shape).astype(np.float32)
+        frames.append(np.clip(f * 255, 0, 255).astype(np.uint8))
+        gts.append(Box(round(x), round(y), 20, 40))
+    return frames, gts
+
+
+@pytest.mark.parametrize("seed", [5, 6, 7])
+def test_default_never_reports_tracking_on_background_after_the_target_left(seed: int) -> None:
+    """Issue 12 "no false lock": once the target has left, the default tracker's box sits on background;
+    the long-term memory (LCT style) rejects it, so no frame is `tracking`. The papers' robust_adaptive
+    reports `tracking` on background here (3-9 of the 49 frames for these seeds)."""
+    frames, gts = leaving_scene(seed)
+    trk = Tracker(TrackerParams())
+    trk.init(frames[0], gts[0])
+    states = [trk.update(f).state for f in frames[1:]]
+    assert all(s is TrackState.TRACKING for s in states[:28])  # followed while visible
+    assert not any(s is TrackState.TRACKING for s in states[30:])

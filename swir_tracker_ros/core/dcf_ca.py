@@ -3,48 +3,48 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
-from swir_tracker_ros.core.kcf import _check, gaussian_label_spectrum, irfft2, linear_correlation, rfft2
-from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.core.kcf import gaussian_label_spectrum, irfft2, linear_correlation, rfft2
+from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
 
 
 @dataclass
 class DCFCAParams:
-    """DCF-CA defaults of the reference code used by the dissertation (Table in seed-003 §1.1)."""
+    """DCF-CA pipeline of the dissertation: filter (reference code defaults, seed-003 §1.1), APCE tests."""
 
-    padding: float = field(
-        default=2.0, metadata={"doc": "window = (1 + padding) x target", "min": 0.5, "max": 4.0}
+    padding: float = _f(2.0, "window = (1 + padding) x target (3x)", 0.5, 4.0)
+    lambda1: float = _f(1e-4, "ridge regularisation lambda1", 1e-8, 1.0)
+    lambda2: float = _f(25.0, "context regularisation lambda2", 0.0, 1000.0)
+    interp_factor: float = _f(0.015, "learning rate delta (eq. 4.92)", 0.0, 1.0)
+    output_sigma_factor: float = _f(0.1, "Gaussian label sigma = sqrt(w h) x factor / cell", 0.01, 1.0)
+    n_context: int = _f(4, "context patches (up, down, left, right)", 0, 4)
+    feature: str = _f(
+        "hog_soft", "filter features: FHOG with soft (hog_soft) or hard (hog) bins, or raw gray",
+        choices=FEATURE_KINDS,
     )
-    lambda1: float = field(default=1e-4, metadata={"doc": "ridge regularisation", "min": 1e-8, "max": 1.0})
-    lambda2: float = field(
-        default=25.0, metadata={"doc": "context regularisation", "min": 0.0, "max": 1000.0}
+    cell_size: int = _f(4, "FHOG cell size in pixels (gray features always use 1)", 1, 8)
+    reference_peak: float = _f(
+        0.55,
+        "(ours) responses are scaled so the first-frame self-response peaks at this value; it puts "
+        "the tracking peaks at the dissertation's 0.2-0.29 (Fig. 4.6), the range eq. 6.9 expects; 0: raw",
+        0.0,
+        10.0,
     )
-    interp_factor: float = field(
-        default=0.015, metadata={"doc": "learning rate delta", "min": 0.0, "max": 1.0}
+    apce_occlusion_ratio: float = _f(
+        0.6, "occlusion when APCE <= ratio x mean APCE (eq. 4.96)", 0.0, 2.0
     )
-    output_sigma_factor: float = field(
-        default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0}
+    apce_update_ratio: float = _f(
+        0.583, "no model update when APCE <= ratio x mean (eq. 4.97)", 0.0, 2.0
     )
-    n_context: int = field(
-        default=4, metadata={"doc": "context patches (up, down, left, right)", "min": 0, "max": 4}
-    )
-    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": FEATURE_KINDS})
-    cell_size: int = field(default=4, metadata={"doc": "feature cell in pixels", "min": 1, "max": 8})
 
     def validate(self) -> None:
-        _check("padding", self.padding, 0.5, 4.0)
-        _check("lambda1", self.lambda1, 1e-8, 1.0)
-        _check("lambda2", self.lambda2, 0.0, 1000.0)
-        _check("interp_factor", self.interp_factor, 0.0, 1.0)
-        _check("output_sigma_factor", self.output_sigma_factor, 0.01, 1.0)
-        _check("n_context", self.n_context, 0, 4)
-        if self.feature not in FEATURE_KINDS:
-            raise ParameterError(f"feature={self.feature!r} is not one of {FEATURE_KINDS}")
-        _check("cell_size", self.cell_size, 1, 8)
+        validate_params(self, "dcf_ca.")
 
 
 def context_offsets(target_w: float, target_h: float, n: int) -> list[tuple[float, float]]:
@@ -92,6 +92,6 @@ class DCFCA:
     def respond(self, z: np.ndarray) -> np.ndarray:
         """Responses (N, rows, cols) of feature maps z (N, C, rows, cols)."""
         if self.model_alphaf is None:
-            raise RuntimeError("DCFCA.respond called before train")
+            raise TrackerError("DCFCA.respond called before train")
         kzf = linear_correlation(rfft2(z), self.model_xf, self.shape)
         return irfft2(self.model_alphaf[None] * kzf, self.shape)

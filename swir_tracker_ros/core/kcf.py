@@ -3,44 +3,52 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 import scipy.fft as sfft
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
-from swir_tracker_ros.errors import ParameterError
-
-
-def _check(name: str, value: float, lo: float, hi: float) -> None:
-    if not (lo <= value <= hi):
-        raise ParameterError(f"{name}={value!r} is outside [{lo}, {hi}]")
+from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
 
 
 @dataclass
 class KCFParams:
-    """Published KCF defaults for HOG features (`KCFParams.gray()` gives the raw-pixel set)."""
+    """KCF pipeline of paper 000: filter (Henriques et al. 2015, HOG defaults), failure test and update gate.
 
-    padding: float = field(
-        default=1.5, metadata={"doc": "search window = (1 + padding) x target", "min": 0.5, "max": 4.0}
+    `KCFParams.gray()` gives the raw-pixel set of the MATLAB reference.
+    """
+
+    padding: float = _f(1.5, "search window = (1 + padding) x target (paper 000: 2.5x)", 0.5, 4.0)
+    lambda_: float = _f(1e-4, "ridge regularisation lambda (eq. 1)", 1e-8, 1.0)
+    kernel_sigma: float = _f(0.5, "Gaussian kernel sigma (eq. 7); 0.2 is the raw-gray value", 0.01, 10.0)
+    interp_factor: float = _f(0.02, "model learning rate; 0.075 is the raw-gray value", 0.0, 1.0)
+    output_sigma_factor: float = _f(0.1, "Gaussian label sigma = sqrt(w h) x factor / cell", 0.01, 1.0)
+    feature: str = _f(
+        "hog_soft",
+        "filter features: 31-channel FHOG (cell 4) with soft orientation bins as in Piotr's fhog "
+        "(hog_soft, default: better on the real sequences), with hard nearest bins (hog: better on the "
+        "synthetic occlusion scenarios; docs/tracking_core.md), or raw gray (cell 1)",
+        choices=FEATURE_KINDS,
     )
-    lambda_: float = field(
-        default=1e-4, metadata={"doc": "ridge regularisation (eq. 1)", "min": 1e-8, "max": 1.0}
+    cell_size: int = _f(4, "FHOG cell size in pixels (gray features always use 1)", 1, 8)
+    psr_threshold: float = _f(
+        7.0, "failure detection: PSR below this switches to 9 windows (paper 000)", 0.0, 100.0
     )
-    kernel_sigma: float = field(
-        default=0.5, metadata={"doc": "Gaussian kernel bandwidth (eq. 7)", "min": 0.01, "max": 10.0}
+    update_peak_threshold: float = _f(
+        0.5, "update gate `peak`: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0
     )
-    interp_factor: float = field(
-        default=0.02, metadata={"doc": "model learning rate", "min": 0.0, "max": 1.0}
+    update_gate: str = _f(
+        "peak",
+        "confident-update gate: peak (paper 000: peak > update_peak_threshold) or lmcf (Wang et al., "
+        "CVPR 2017, eq. 12: peak and APCE both above a ratio of their means over the updated frames)",
+        choices=("peak", "lmcf"),
     )
-    output_sigma_factor: float = field(
-        default=0.1, metadata={"doc": "label sigma / sqrt(w h)", "min": 0.01, "max": 1.0}
-    )
-    feature: str = field(default="hog", metadata={"doc": "feature type", "choices": FEATURE_KINDS})
-    cell_size: int = field(
-        default=4, metadata={"doc": "feature cell in pixels (1 for gray)", "min": 1, "max": 8}
-    )
+    lmcf_peak_ratio: float = _f(0.7, "gate lmcf: beta1, peak >= beta1 x mean peak (LMCF)", 0.0, 2.0)
+    lmcf_apce_ratio: float = _f(0.45, "gate lmcf: beta2, APCE >= beta2 x mean APCE (LMCF)", 0.0, 2.0)
 
     @classmethod
     def gray(cls) -> KCFParams:
@@ -48,14 +56,7 @@ class KCFParams:
         return cls(kernel_sigma=0.2, interp_factor=0.075, feature="gray", cell_size=1)
 
     def validate(self) -> None:
-        _check("padding", self.padding, 0.5, 4.0)
-        _check("lambda_", self.lambda_, 1e-8, 1.0)
-        _check("kernel_sigma", self.kernel_sigma, 0.01, 10.0)
-        _check("interp_factor", self.interp_factor, 0.0, 1.0)
-        _check("output_sigma_factor", self.output_sigma_factor, 0.01, 1.0)
-        if self.feature not in FEATURE_KINDS:
-            raise ParameterError(f"feature={self.feature!r} is not one of {FEATURE_KINDS}")
-        _check("cell_size", self.cell_size, 1, 8)
+        validate_params(self, "kcf.")
 
 
 @lru_cache(maxsize=16)
@@ -132,7 +133,7 @@ class KCF:
 
     def respond(self, z: np.ndarray) -> np.ndarray:
         if self.model_alphaf is None:
-            raise RuntimeError("KCF.respond called before train")
+            raise TrackerError("KCF.respond called before train")
         zf = rfft2(z)
         zz = np.einsum("nchw,nchw->n", z, z)
         xx = float(np.vdot(self.model_x, self.model_x))

@@ -1,15 +1,21 @@
 # SPDX-License-Identifier: Apache-2.0
-"""`TrackerParams`: the flat, documented parameter set of the tracking core (declared as ROS parameters)."""
+"""`TrackerParams`: the one documented parameter set of the tracking core (declared as ROS parameters).
+
+Per-filter settings are nested dataclasses (`kcf: KCFParams`, ...): ROS names `tracker.kcf.padding`, ...
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field
 
-from swir_tracker_ros.core.features import FEATURE_KINDS
+from swir_tracker_ros.core.dcf_ca import DCFCAParams
+from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.kalman.influence import HUBER_K
 from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
 
-VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r")
+VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r", "measured")
 PIPELINES = ("kcf", "dcf_ca")
 
 
@@ -21,10 +27,12 @@ class TrackerParams:
     """
 
     variant: str = _f(
-        "robust_adaptive",
+        "measured",
         "cf: base filter only; kalman: standard KF + 9 windows + scale + gated "
         "update; robust: Huber k=1.5; robust_adaptive: k from the peak (paper 000 eq. 38 / "
-        "dissertation eq. 6.9); robust_adaptive_r: plus adaptive R (dissertation eq. 5.95)",
+        "dissertation eq. 6.9); robust_adaptive_r: plus adaptive R (dissertation eq. 5.95); measured "
+        "(ours, default: best OPE on the real set): kalman, but a confident frame reports and searches from "
+        "the correlation peak itself, the Kalman filter only carries the velocity and the re-detection",
         choices=VARIANTS,
     )
     pipeline: str = _f(
@@ -32,32 +40,12 @@ class TrackerParams:
         "kcf: paper 000 (KCF, PSR failure detection); dcf_ca: dissertation (DCF-CA, APCE)",
         choices=PIPELINES,
     )
-    feature: str = _f(
-        "hog_soft",
-        "filter features: 31-channel FHOG (cell 4) with soft orientation bins as in Piotr's fhog "
-        "(hog_soft, default: better on the real sequences), with hard nearest bins (hog: better on the "
-        "synthetic occlusion scenarios; docs/tracking_core.md), or raw gray (cell 1)",
-        choices=FEATURE_KINDS,
+    kcf: KCFParams = field(
+        default_factory=KCFParams, metadata={"doc": "paper 000 KCF pipeline (core/kcf.py KCFParams)"}
     )
-    cell_size: int = _f(4, "FHOG cell size in pixels (gray features always use 1)", 1, 8)
-    kcf_padding: float = _f(1.5, "KCF search window = (1 + padding) x target (paper 000: 2.5x)", 0.5, 4.0)
-    kcf_lambda: float = _f(1e-4, "KCF ridge regularisation lambda (eq. 1)", 1e-8, 1.0)
-    kcf_kernel_sigma: float = _f(
-        0.5, "KCF Gaussian kernel sigma (eq. 7); 0.2 is the raw-gray value", 0.01, 10.0
+    dcf_ca: DCFCAParams = field(
+        default_factory=DCFCAParams, metadata={"doc": "dissertation DCF-CA pipeline (core/dcf_ca.py)"}
     )
-    kcf_interp_factor: float = _f(0.02, "KCF model learning rate; 0.075 is the raw-gray value", 0.0, 1.0)
-    dcf_padding: float = _f(2.0, "DCF-CA window = (1 + padding) x target (3x)", 0.5, 4.0)
-    dcf_lambda1: float = _f(1e-4, "DCF-CA ridge regularisation lambda1", 1e-8, 1.0)
-    dcf_lambda2: float = _f(25.0, "DCF-CA context regularisation lambda2", 0.0, 1000.0)
-    dcf_interp_factor: float = _f(0.015, "DCF-CA learning rate delta (eq. 4.92)", 0.0, 1.0)
-    dcf_reference_peak: float = _f(
-        0.55,
-        "(ours) DCF-CA responses are scaled so the first-frame self-response peaks at this value; it puts "
-        "the tracking peaks at the dissertation's 0.2-0.29 (Fig. 4.6), the range eq. 6.9 expects; 0: raw",
-        0.0,
-        10.0,
-    )
-    output_sigma_factor: float = _f(0.1, "Gaussian label sigma = sqrt(w h) x factor / cell", 0.01, 1.0)
     scale_step: float = _f(0.05, "relative size step of the scale samples (paper 000: 5 %)", 0.0, 0.3)
     n_scales: int = _f(5, "scale samples around the predicted size (1, 3 or 5)", 1, 5)
     large_target_halving: float = _f(
@@ -66,9 +54,6 @@ class TrackerParams:
         0.0,
         10000.0,
     )
-    psr_threshold: float = _f(
-        7.0, "KCF failure detection: PSR below this switches to 9 windows (paper 000)", 0.0, 100.0
-    )
     psr_exclusion_px: int = _f(
         10,
         "side of the square around the peak excluded from the PSR sidelobe, in "
@@ -76,16 +61,7 @@ class TrackerParams:
         1,
         100,
     )
-    update_peak_threshold: float = _f(
-        0.5, "KCF: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0
-    )
-    apce_occlusion_ratio: float = _f(
-        0.6, "DCF-CA: occlusion when APCE <= ratio x mean APCE (eq. 4.96)", 0.0, 2.0
-    )
-    apce_update_ratio: float = _f(
-        0.583, "DCF-CA: no model update when APCE <= ratio x mean (eq. 4.97)", 0.0, 2.0
-    )
-    fixed_huber_threshold: float = _f(1.5, "Huber threshold of the `robust` variant", 0.05, 10.0)
+    fixed_huber_threshold: float = _f(HUBER_K, "Huber threshold of the `robust` variant", 0.05, 10.0)
     robust_method: str = _f(
         "auto",
         "statistical linearisation of the robust update; auto: A4 for kcf "
@@ -99,6 +75,25 @@ class TrackerParams:
         False,
         "also search the 5 scales in each of the 9 windows (paper 000 text); "
         "off: KF size during re-detection (dissertation), 5x cheaper",
+    )
+    redetect_peak_ratio: float = _f(
+        0.0,
+        "(ours) while re-detecting, a peak in a window away from the prediction is a measurement only when "
+        "it reaches this ratio of the mean peak of the tracked frames (otherwise the filter coasts); 0: off",
+        0.0,
+        2.0,
+    )
+    memory_ratio: float = _f(
+        0.5,
+        "(ours, variant measured; LCT-style memory, Ma et al. CVPR 2015) a frame is `tracking` only when "
+        "the long-term memory filter's peak on the box reaches this ratio of its mean over the verified "
+        "frames; a "
+        "rejected frame is `occluded` and teaches neither filter; 0: off (the papers)",
+        0.0,
+        2.0,
+    )
+    memory_rate: float = _f(
+        0.01, "(ours) learning rate of the memory on frames whose memory peak is above its mean", 0.0, 1.0
     )
     max_occluded_frames: int = _f(
         150, "(ours) frames in re-detection before the state becomes lost", 1, 100000
@@ -122,23 +117,19 @@ class TrackerParams:
     )
 
     def validate(self) -> None:
-        """Raise ParameterError naming the first field whose value is of the wrong type or out of range."""
-        for f in fields(self):
-            v = getattr(self, f.name)
-            meta = f.metadata
-            expected = {"str": str, "int": int, "float": (int, float), "bool": bool}[str(f.type)]
-            if (isinstance(v, bool) and str(f.type) != "bool") or not isinstance(v, expected):
-                raise ParameterError(f"TrackerParams.{f.name} = {v!r} has the wrong type; expected {f.type}")
-            if "choices" in meta and v not in meta["choices"]:
-                raise ParameterError(f"TrackerParams.{f.name} = {v!r} is not one of {meta['choices']}")
-            if "min" in meta and not (meta["min"] <= v <= meta["max"]):
-                raise ParameterError(
-                    f"TrackerParams.{f.name} = {v!r} is outside [{meta['min']}, {meta['max']}]"
-                )
+        """Raise ParameterError naming the first parameter of the wrong type or out of range."""
+        validate_params(self)
+
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
         if self.n_scales not in (1, 3, 5):
-            raise ParameterError(f"TrackerParams.n_scales = {self.n_scales} must be 1, 3 or 5")
+            raise ParameterError(f"parameter n_scales = {self.n_scales} must be 1, 3 or 5")
         if self.stretch_low_percentile >= self.stretch_high_percentile:
-            raise ParameterError("TrackerParams.stretch_low_percentile must be below stretch_high_percentile")
+            raise ParameterError("parameter stretch_low_percentile must be below stretch_high_percentile")
+
+    def filter_params(self) -> KCFParams | DCFCAParams:
+        """The Params of the selected pipeline's base filter (`kcf`, `dcf_ca`, ...)."""
+        return getattr(self, self.pipeline)
 
     def scale_factors(self) -> tuple[float, ...]:
         """Relative sizes searched in normal mode, e.g. (0.90, 0.95, 1, 1.05, 1.10)."""

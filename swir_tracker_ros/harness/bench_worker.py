@@ -3,6 +3,10 @@
 
 Started by `harness compare` as `.venv-bench/bin/python -m swir_tracker_ros.harness.bench_worker` with the
 repository on PYTHONPATH; imports only numpy, cv2 (opencv-contrib), rosbags and this package's plain parts.
+
+One process runs several starts of the same tracker side by side over one decoding of the frames: the OPE
+start (`none`, the ground-truth box of the first frame with ground truth) and any SRE perturbations
+(`--perturb left scale_0.8 ...`, boxes from `metrics.sre_box`), or one explicit start box (`--init`).
 """
 
 from __future__ import annotations
@@ -16,13 +20,16 @@ import cv2
 import numpy as np
 
 from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS, SRE_STYLES, sre_box
 from swir_tracker_ros.harness.sources import open_source
+from swir_tracker_ros.types import Box
 
 FACTORIES = {
     "KCF": lambda: cv2.TrackerKCF_create(),
     "CSRT": lambda: cv2.TrackerCSRT_create(),
     "MOSSE": lambda: cv2.legacy.TrackerMOSSE_create(),
 }
+WORKER_VERSION = 2  # part of the peer-cache key: bump when a change here changes the boxes
 
 
 def to_bgr8(image: np.ndarray) -> np.ndarray:
@@ -34,30 +41,55 @@ def to_bgr8(image: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image
 
 
-def run(spec: str, name: str, max_frames: int | None) -> dict:
+def cv_rect(box: Box) -> tuple[int, int, int, int]:
+    """OpenCV's init takes an integer rectangle: round the corners, keep at least 1 px."""
+    x0, y0 = round(box.x), round(box.y)
+    x1, y1 = round(box.x + box.w), round(box.y + box.h)
+    return x0, y0, max(1, x1 - x0), max(1, y1 - y0)
+
+
+def run(spec: str, name: str, max_frames: int | None, perturbations: list[str] | None = None,
+        init: Box | None = None, style: str = "otb") -> dict:
+    """Every start's per-frame boxes and ok flags, the shared ground truth, occlusion flags and shares."""
     src = open_source(spec, max_frames=max_frames)
-    trk = None
-    pred, gt, occ = [], [], []
-    seconds = 0.0
+    starts = ["init"] if init is not None else (perturbations or ["none"])
+    trackers: dict[str, object] = {}
+    runs = {p: {"perturbation": p, "init": None, "pred": [], "ok": [], "seconds": 0.0} for p in starts}
+    gt, occ, share = [], [], []
     for fr in src.frames():
         gt.append(None if fr.gt is None else list(fr.gt.as_tuple()))
         occ.append(fr.occluded)
+        share.append(getattr(fr, "occlusion", None))
         img = to_bgr8(fr.image)
-        if trk is None:
+        if not trackers:
             if fr.gt is None:
-                pred.append(None)
+                for r in runs.values():
+                    r["pred"].append(None)
+                    r["ok"].append(False)
                 continue
-            trk = FACTORIES[name]()
-            t0 = time.perf_counter()
-            trk.init(img, tuple(round(v) for v in fr.gt.as_tuple()))
-            seconds += time.perf_counter() - t0
-            pred.append(list(fr.gt.as_tuple()))
+            h, w = img.shape[:2]
+            for p, r in runs.items():
+                box = init if init is not None else sre_box(fr.gt, p, w, h, style)
+                trk = FACTORIES[name]()
+                t0 = time.perf_counter()
+                trk.init(img, cv_rect(box))
+                r["seconds"] += time.perf_counter() - t0
+                r["init"] = list(box.as_tuple())
+                r["pred"].append(list(box.as_tuple()))
+                r["ok"].append(False)  # the start frame is no tracking claim
+                trackers[p] = trk
             continue
-        t0 = time.perf_counter()
-        ok, box = trk.update(img)
-        seconds += time.perf_counter() - t0
-        pred.append([float(v) for v in box] if ok else None)
-    return {"name": src.name, "tracker": name, "pred": pred, "gt": gt, "occluded": occ, "seconds": seconds}
+        for p, trk in trackers.items():
+            r = runs[p]
+            t0 = time.perf_counter()
+            ok, box = trk.update(img)
+            r["seconds"] += time.perf_counter() - t0
+            r["pred"].append([float(v) for v in box] if ok else None)
+            r["ok"].append(bool(ok))
+    if not trackers:
+        raise HarnessError(f"{src.name}: no frame with ground truth; nothing to track")
+    return {"name": src.name, "tracker": name, "opencv": cv2.__version__, "worker": WORKER_VERSION,
+            "gt": gt, "occluded": occ, "occlusion": share, "runs": list(runs.values())}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -65,9 +97,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("source")
     ap.add_argument("--tracker", choices=sorted(FACTORIES), required=True)
     ap.add_argument("--frames", type=int, default=None)
+    ap.add_argument("--perturb", nargs="+", default=None, choices=("none", *SRE_PERTURBATIONS),
+                    help="starts to run side by side (none = the ground-truth box; default: none)")
+    ap.add_argument("--style", choices=SRE_STYLES, default="otb", help="SRE box definition (metrics.sre_box)")
+    ap.add_argument("--init", default=None, metavar="X,Y,W,H", help="one explicit start box instead")
     args = ap.parse_args(argv)
     try:
-        json.dump(run(args.source, args.tracker, args.frames), sys.stdout)
+        init = None
+        if args.init is not None:
+            try:
+                init = Box(*(float(v) for v in args.init.split(",")))
+            except (TypeError, ValueError):
+                raise HarnessError(f"--init wants X,Y,W,H, got {args.init!r}") from None
+        json.dump(run(args.source, args.tracker, args.frames, args.perturb, init, args.style), sys.stdout)
     except HarnessError as exc:
         print(f"bench_worker: {exc}", file=sys.stderr)
         return 2

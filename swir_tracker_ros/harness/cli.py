@@ -14,6 +14,8 @@ from .bagio import FrameRecord, bag_info, write_bag
 from .evaluate import VARIANTS, EvalResult, evaluate, format_table
 from .sources import SYNTH_PREFIX, Source, convert_bits, open_source
 
+DEFAULT_PEER_CACHE = str(Path.home() / ".cache" / "swir_tracker_ros" / "peers")
+
 
 def _err(msg: str) -> None:
     print(f"harness: error: {msg}", file=sys.stderr)
@@ -98,6 +100,11 @@ def cmd_info(a: argparse.Namespace) -> int:
 def _sources(a: argparse.Namespace) -> list[Source]:
     srcs = []
     for spec in a.bags:
+        if spec == SYNTH_PREFIX + "all":  # every synthetic scenario (`harness synth --list`)
+            from ..scene import scenarios
+
+            srcs += [open_source(SYNTH_PREFIX + n, a.frames) for n in scenarios()]
+            continue
         p = Path(spec)
         if p.is_dir() and not (p / "gt.txt").exists() and not (p / "metadata.yaml").exists() \
                 and any((c / "gt.txt").exists() for c in p.iterdir() if c.is_dir()):
@@ -133,6 +140,8 @@ def cmd_eval(a: argparse.Namespace) -> int:
 
 
 def cmd_compare(a: argparse.Namespace) -> int:
+    if a.protocol:
+        return _compare_protocol(a)
     from .compare import add_opencv
 
     srcs = _sources(a)
@@ -146,8 +155,31 @@ def cmd_compare(a: argparse.Namespace) -> int:
     result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse)
     for name, per in result.sequences.items():  # reused OpenCV rows
         per.update({k: v for k, v in reuse.sequences.get(name, {}).items() if k.startswith("opencv_")})
-    add_opencv(result, srcs, a.opencv, _progress(a))
+    add_opencv(result, srcs, ["KCF", "CSRT", "MOSSE"] if a.opencv is None else a.opencv, _progress(a))
     _finish(result, a)
+    return 0
+
+
+def _compare_protocol(a: argparse.Namespace) -> int:
+    """`compare --protocol ope sre`: OPE/SRE tables, false tracking, occlusions survived (protocol.py)."""
+    import os
+
+    from ..tracker import TrackerParams
+    from .protocol import format_protocol, run_protocol
+
+    if a.reuse or a.plots or a.curves:
+        raise HarnessError("--reuse, --plots and --curves belong to the plain compare, not to --protocol")
+    variants = [TrackerParams().variant] if a.tracker is None else a.tracker
+    peers = ["KCF", "CSRT"] if a.opencv is None else a.opencv
+    cache = None if a.no_peer_cache else (a.peer_cache or os.environ.get("SWIR_PEER_CACHE")
+                                          or DEFAULT_PEER_CACHE)
+    result = run_protocol(_sources(a), variants, peers, a.protocol, a.pipeline, a.sre_style, a.jobs, cache,
+                          _progress(a))
+    print(format_protocol(result))
+    if a.json:
+        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
+        print(f"wrote {a.json}")
     return 0
 
 
@@ -210,7 +242,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("bags", nargs="+", help="bags, sequence folders, a folder of them, or synth:NAME")
         p.add_argument("--tracker", nargs="*", choices=VARIANTS, default=None,
                        help="variants (default: all; `compare --tracker` alone: OpenCV only)")
-        p.add_argument("--pipeline", choices=("kcf", "dcf_ca"), default="kcf")
+        p.add_argument("--pipeline", default=None,
+                       help="TrackerParams.pipeline (default: TrackerParams' own default)")
         p.add_argument("--frames", type=int, default=None, help="only the first N frames of each source")
         p.add_argument("--image-topic", default=None)
         p.add_argument("--gt-topic", default=None)
@@ -227,7 +260,18 @@ def build_parser() -> argparse.ArgumentParser:
     eval_args(p)
     p.add_argument("--reuse", nargs="+", default=None,
                    help="JSON results (--json ... --curves) whose rows need not be run again")
-    p.add_argument("--opencv", nargs="+", default=["KCF", "CSRT", "MOSSE"], choices=("KCF", "CSRT", "MOSSE"))
+    p.add_argument("--opencv", nargs="*", default=None, choices=("KCF", "CSRT", "MOSSE"),
+                   help="OpenCV peers (default: KCF CSRT MOSSE; with --protocol: KCF CSRT; empty: none)")
+    p.add_argument("--protocol", nargs="+", choices=("ope", "sre"), default=None,
+                   help="issue-12 protocol: OPE and/or SRE (12 perturbed starts), false tracking, occlusions "
+                        "survived; our runs and peers on the same frames (docs/harness.md)")
+    p.add_argument("--jobs", type=int, default=1, help="--protocol: parallel (tracker, source) tasks")
+    p.add_argument("--sre-style", choices=("otb", "shift"), default="otb",
+                   help="SRE start boxes: the OTB toolkit's shiftInitBB (otb) or rigid 10 %% shifts (shift)")
+    p.add_argument("--peer-cache", default=None,
+                   help="--protocol: OpenCV results cache (default: $SWIR_PEER_CACHE or "
+                        f"{DEFAULT_PEER_CACHE})")
+    p.add_argument("--no-peer-cache", action="store_true", help="--protocol: always run the peers")
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("replay", help="publish a bag to ROS (with /clock), record /track/*, score")

@@ -10,12 +10,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
 from ..errors import HarnessError, SwirTrackerError
 from ..types import Box, TrackState
-from .metrics import Score, mean_scores, score
+from .metrics import Score, mean_scores, score, sre_box
 from .sources import Source
 
-VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r")
 SUMMARY_FIELDS = ("precision_20", "success_auc", "center_error", "lost_frames", "fps")
 
 
@@ -28,6 +28,9 @@ class Run:
     occluded: list[bool | None]
     seconds: float
     states: list[str] = field(default_factory=list)
+    occlusion: list[float | None] = field(default_factory=list)  # covered share (synthetic sources)
+    init: Box | None = None  # start box
+    init_index: int = 0  # frame of the start
 
     def score(self) -> Score:
         return score(self.pred, self.gt, self.seconds, self.occluded)
@@ -80,58 +83,88 @@ class EvalResult:
                 "mean": {v: pack(s) for v, s in self.mean().items()}}
 
 
-def make_tracker_factory(variant: str, pipeline: str = "kcf") -> Callable[[], object]:
-    """A zero-argument constructor of the core `Tracker` for one variant (imported lazily)."""
+def make_tracker_factory(variant: str, pipeline: str | None = None) -> Callable[[], object]:
+    """A zero-argument constructor of the core `Tracker` for one variant (imported lazily).
+
+    `pipeline` None keeps `TrackerParams`' default pipeline. A bad name is a HarnessError.
+    """
+    from ..errors import ParameterError
     from ..tracker import Tracker, TrackerParams
 
-    params = TrackerParams(variant=variant, pipeline=pipeline)
-    params.validate()
-    return lambda: Tracker(TrackerParams(variant=variant, pipeline=pipeline))
+    kw = {"variant": variant} if pipeline is None else {"variant": variant, "pipeline": pipeline}
+    try:
+        TrackerParams(**kw).validate()
+    except (ParameterError, TypeError) as exc:
+        raise HarnessError(f"tracker parameters: {exc}") from None
+    return lambda: Tracker(TrackerParams(**kw))
 
 
-def run_source(source: Source, factory: Callable[[], object]) -> Run:
-    """OPE: init on the first frame that has ground truth, update on every later frame, time the tracker."""
-    trk = factory()
-    pred: list[Box | None] = []
+def run_starts(source: Source, factory: Callable[[], object], starts: Sequence[str] = ("none",),
+               style: str = "otb", init: Box | None = None) -> dict[str, Run]:
+    """Run one tracker per start side by side over one decoding of `source` (OPE and SRE starts).
+
+    Each start inits its own tracker on the first frame that has ground truth, with the ground-truth box
+    (`none`), an SRE perturbation of it (`metrics.sre_box`, `style`) or the explicit `init` box (key "init"),
+    and updates on every later frame; each tracker is timed on its own.
+    """
+    keys = ["init"] if init is not None else list(starts)
+    trackers: dict[str, object] = {}
+    runs = {k: Run([], [], [], 0.0, []) for k in keys}
     gts: list[Box | None] = []
     occ: list[bool | None] = []
-    states: list[str] = []
-    seconds = 0.0
-    started = False
+    share: list[float | None] = []
     depth = source.bits if source.bits not in (None, 8, 16) else None
     for fr in source.frames():
         gts.append(fr.gt)
         occ.append(fr.occluded)
-        if not started:
+        share.append(getattr(fr, "occlusion", None))
+        if not trackers:
             if fr.gt is None:
-                pred.append(None)
-                states.append("idle")
+                for r in runs.values():
+                    r.pred.append(None)
+                    r.states.append("idle")
                 continue
+            h, w = fr.image.shape[:2]
+            for k, r in runs.items():
+                box = init if init is not None else sre_box(fr.gt, k, w, h, style)
+                trk = factory()
+                t0 = time.perf_counter()
+                try:
+                    trk.init(fr.image, box, bit_depth=depth)
+                except SwirTrackerError as exc:
+                    raise HarnessError(f"{source.name}: tracker init failed on frame {fr.index}: "
+                                       f"{exc}") from None
+                r.seconds += time.perf_counter() - t0
+                r.pred.append(box)
+                r.states.append("init")
+                r.init, r.init_index = box, len(gts) - 1
+                trackers[k] = trk
+            continue
+        for k, trk in trackers.items():
+            r = runs[k]
             t0 = time.perf_counter()
             try:
-                trk.init(fr.image, fr.gt, bit_depth=depth)
+                res = trk.update(fr.image, bit_depth=depth)
             except SwirTrackerError as exc:
-                raise HarnessError(f"{source.name}: tracker init failed on frame {fr.index}: {exc}") from None
-            seconds += time.perf_counter() - t0
-            started = True
-            pred.append(fr.gt)
-            states.append("init")
-            continue
-        t0 = time.perf_counter()
-        try:
-            res = trk.update(fr.image, bit_depth=depth)
-        except SwirTrackerError as exc:
-            raise HarnessError(f"{source.name}: tracker update failed on frame {fr.index}: {exc}") from None
-        seconds += time.perf_counter() - t0
-        lost = res.state in (TrackState.LOST, TrackState.IDLE) or not res.box.is_valid()
-        pred.append(None if lost else res.box)
-        states.append(res.state.value)
-    if not started:
+                raise HarnessError(f"{source.name}: tracker update failed on frame {fr.index}: "
+                                   f"{exc}") from None
+            r.seconds += time.perf_counter() - t0
+            lost = res.state in (TrackState.LOST, TrackState.IDLE) or not res.box.is_valid()
+            r.pred.append(None if lost else res.box)
+            r.states.append(res.state.value)
+    if not trackers:
         raise HarnessError(f"{source.name}: no frame with ground truth; nothing to track")
-    return Run(pred, gts, occ, seconds, states)
+    for r in runs.values():
+        r.gt, r.occluded, r.occlusion = gts, occ, share
+    return runs
 
 
-def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str = "kcf",
+def run_source(source: Source, factory: Callable[[], object]) -> Run:
+    """OPE: init on the first frame that has ground truth, update on every later frame, time the tracker."""
+    return run_starts(source, factory)["none"]
+
+
+def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str | None = None,
              progress: Callable[[str], None] | None = None, reuse: EvalResult | None = None) -> EvalResult:
     """Score every variant on every source (sequence names must be unique); rows in `reuse` are kept."""
     result = EvalResult()

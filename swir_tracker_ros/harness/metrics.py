@@ -117,3 +117,129 @@ def mean_scores(scores: Sequence[Score]) -> Score:
         precision_curve=list(np.mean([s.precision_curve for s in scores], axis=0)),
         success_curve=list(np.mean([s.success_curve for s in scores], axis=0)),
     )
+
+
+# --- Spatial robustness (SRE) start boxes --------------------------------------------------------------
+
+SRE_PERTURBATIONS = ("left", "right", "up", "down", "top_left", "top_right", "bottom_left", "bottom_right",
+                     "scale_0.8", "scale_0.9", "scale_1.1", "scale_1.2")
+SRE_STYLES = ("otb", "shift")
+SRE_SHIFT = 0.1  # shift: 10 % of the target's width / height (Wu et al., CVPR 2013, sec. 3.2)
+_DIRECTIONS = {"left": (-1, 0), "right": (1, 0), "up": (0, -1), "down": (0, 1), "top_left": (-1, -1),
+               "top_right": (1, -1), "bottom_left": (-1, 1), "bottom_right": (1, 1)}
+
+
+def _mround(v: float) -> float:
+    """Matlab's round (halves away from zero), as the OTB toolkit rounds."""
+    return float(math.copysign(math.floor(abs(v) + 0.5), v))
+
+
+def sre_box(box: Box, perturbation: str, width: int, height: int, style: str = "otb") -> Box:
+    """The start box of one SRE run (Wu, Lim, Yang, "Online Object Tracking: A Benchmark", CVPR 2013).
+
+    OTB's spatial robustness evaluation starts each sequence 12 times: "8 spatial shifts including 4 center
+    shifts and 4 corner shifts, and 4 scale variations. The amount for shift is 10 % of target size, and the
+    scale ratio varies among 0.8, 0.9, 1.1 and 1.2 to the ground truth."
+
+    style "otb" is the benchmark toolkit's `shiftInitBB`, in 0-based pixels: the 4 centre shifts move the box
+    by ceil(0.1 w) / ceil(0.1 h); the 4 corner shifts move ONE corner outwards by round(0.1 w), round(0.1 h)
+    with the opposite corner fixed (the box grows by ~10 % per axis); the scales keep the centre and round
+    x, y, w, h. style "shift" reads the paper literally: the whole box moves by (+-0.1 w, +-0.1 h) in 8
+    directions, without rounding. Both clip as the toolkit does: a negative x or y becomes 0 with the size
+    kept (the box moves), then a box reaching past the right or bottom edge is cut there.
+    """
+    if style not in SRE_STYLES:
+        raise ValueError(f"SRE style {style!r}; choose from {', '.join(SRE_STYLES)}")
+    x, y, w, h = box.as_tuple()
+    if perturbation.startswith("scale_"):
+        r = float(perturbation.removeprefix("scale_"))
+        cx, cy = x + w / 2.0, y + h / 2.0
+        nw, nh = r * w, r * h
+        x, y, w, h = (_mround(v) for v in (cx - nw / 2.0, cy - nh / 2.0, nw, nh))
+    elif perturbation in _DIRECTIONS:
+        sx, sy = _DIRECTIONS[perturbation]
+        if style == "shift":
+            x, y = x + sx * SRE_SHIFT * w, y + sy * SRE_SHIFT * h
+        elif sx == 0 or sy == 0:  # toolkit centre shifts: ceil
+            x, y = x + sx * math.ceil(SRE_SHIFT * w), y + sy * math.ceil(SRE_SHIFT * h)
+        else:  # toolkit corner shifts: one corner moves, the opposite one stays
+            x1, y1 = x + w, y + h  # exclusive right / bottom edge (= toolkit's br + 1)
+            if sx < 0:
+                x = _mround(x - SRE_SHIFT * w)
+            else:
+                x1 = _mround(x1 - 1 + SRE_SHIFT * w) + 1
+            if sy < 0:
+                y = _mround(y - SRE_SHIFT * h)
+            else:
+                y1 = _mround(y1 - 1 + SRE_SHIFT * h) + 1
+            w, h = x1 - x, y1 - y
+    elif perturbation != "none":
+        raise ValueError(f"unknown SRE perturbation {perturbation!r}")
+    if x < 0:
+        x = 0.0
+    if y < 0:
+        y = 0.0
+    w, h = min(w, width - x), min(h, height - y)
+    return Box(float(x), float(y), float(w), float(h))
+
+
+def sre_boxes(box: Box, width: int, height: int, style: str = "otb") -> dict[str, Box]:
+    """The 12 SRE start boxes by perturbation name (`sre_box`)."""
+    return {p: sre_box(box, p, width, height, style) for p in SRE_PERTURBATIONS}
+
+
+# --- False tracking and occlusion survival --------------------------------------------------------------
+
+HIDDEN_ABOVE = 0.5  # an occlusion episode: more than half of the in-image silhouette covered ...
+MIN_EPISODE_S = 0.2  # ... for at least this long (gaps this short merged)
+RECOVERY_S = 1.0  # survived: tracking with IoU > 0 within this long after the target shows again
+
+
+def false_tracking(states: Sequence[str], pred: Sequence[Box | None], gt: Sequence[Box | None]) -> int:
+    """Frames whose reported state is `tracking` while the box does not overlap the ground truth (IoU 0).
+
+    Frames without ground truth are not counted; a `tracking` frame without a box counts (it claims a
+    target it cannot show). For OpenCV trackers the harness maps `ok` to `tracking`.
+    """
+    if not len(states) == len(pred) == len(gt):
+        raise ValueError(f"{len(states)} states, {len(pred)} boxes, {len(gt)} ground-truth frames")
+    return sum(1 for s, p, g in zip(states, pred, gt)
+               if s == "tracking" and g is not None and (p is None or not p.is_finite() or p.iou(g) <= 0.0))
+
+
+def zero_overlap(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> int:
+    """Frames with ground truth where the tracker's box (whatever its state) has IoU 0 or is absent."""
+    return int(np.sum(overlaps(pred, gt) <= 0.0))
+
+
+def occlusion_episodes(occlusion: Sequence[float | None], fps: float, hidden_above: float = HIDDEN_ABOVE,
+                       min_s: float = MIN_EPISODE_S) -> list[tuple[int, int]]:
+    """(first, last) frame of each occlusion episode: runs of frames whose covered share of the in-image
+    silhouette exceeds `hidden_above`, gaps up to `min_s` merged, episodes shorter than `min_s` dropped.
+    Frames with no value (target out of view) are not hidden. An episode still going on at the last frame,
+    or followed by the target out of view, is left out (the target never showed again to be re-acquired).
+    The same rules as demo/analysis.occlusion_episodes, on the covered share instead of the visible one.
+    """
+    hidden = [k for k, o in enumerate(occlusion) if o is not None and o > hidden_above]
+    gap = max(1, round(min_s * fps))
+    runs: list[list[int]] = []
+    for k in hidden:
+        if runs and k - runs[-1][1] <= gap:
+            runs[-1][1] = k
+        else:
+            runs.append([k, k])
+    return [(a, b) for a, b in runs if b - a + 1 >= gap and b + 1 < len(occlusion)
+            and occlusion[b + 1] is not None]
+
+
+def occlusions_survived(episodes: Sequence[tuple[int, int]], states: Sequence[str],
+                        pred: Sequence[Box | None], gt: Sequence[Box | None], fps: float,
+                        within_s: float = RECOVERY_S) -> int:
+    """Episodes after which, within `within_s` of the target showing again, some frame is `tracking`
+    with IoU > 0 against the ground truth."""
+    n = 0
+    for _, b in episodes:
+        end = min(len(states), b + 1 + max(1, round(within_s * fps)))
+        n += any(states[k] == "tracking" and gt[k] is not None and pred[k] is not None
+                 and pred[k].iou(gt[k]) > 0 for k in range(b + 1, end))
+    return n

@@ -21,6 +21,13 @@ SYNTH_PREFIX = "synth:"
 T0_NS = 1_000_000_000  # stamp of frame 0 in bags we write (1 s after the epoch, never 0)
 
 
+@dataclass(frozen=True)
+class SynthFrame(FrameRecord):
+    """A synthetic frame: also the covered share of the target's in-image silhouette (None: not in view)."""
+
+    occlusion: float | None = None
+
+
 @dataclass
 class Source:
     """A re-iterable sequence: `frames()` streams FrameRecords (image, ground truth, occlusion flag)."""
@@ -136,7 +143,8 @@ def _synth_frames(name: str, fps: float) -> Iterator[FrameRecord]:
     run = make_scenario(name, fps=fps)
     for fr in run:
         gt = fr.target.box if fr.target is not None else None
-        yield FrameRecord(T0_NS + round(fr.index * 1e9 / fps), fr.image, gt, fr.occluded, fr.index)
+        occ = fr.target.occlusion if fr.target is not None else None
+        yield SynthFrame(T0_NS + round(fr.index * 1e9 / fps), fr.image, gt, fr.occluded, fr.index, occ)
 
 
 def convert_bits(image: np.ndarray, src_bits: int, dst_bits: int) -> np.ndarray:

@@ -8,7 +8,7 @@ Usage in the tracking core (copy this)::
         dcfca_box_model, kcf_box_model)
 
     model = kcf_box_model()                        # or dcfca_box_model(box.w, box.h)
-    kf = RobustKalmanFilter(model, influence=Huber(1.5), robust_components=(0, 1), method="A2")
+    kf = RobustKalmanFilter(model, influence=Huber(), robust_components=(0, 1), method="A2")
     # variant "kalman": kf = KalmanFilter(model)  (same surface; threshold is ignored)
     kf.initialize(model.state_from_box(box), model.P0)
 
@@ -44,6 +44,7 @@ from swir_tracker_ros.kalman.adaptive import (
     ThresholdMap,
 )
 from swir_tracker_ros.kalman.influence import (
+    HUBER_K,
     Andrews,
     Clipping,
     Hampel,
@@ -61,6 +62,7 @@ from swir_tracker_ros.kalman.statlin import METHODS, alpha_fixed
 
 __all__ = [
     "DISSERTATION_DCFCA",
+    "HUBER_K",
     "METHODS",
     "PAPER000_KCF",
     "AdaptiveNoise",

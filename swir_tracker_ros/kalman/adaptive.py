@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swir_tracker_ros.errors import KalmanError, ParameterError
-from swir_tracker_ros.kalman.influence import Huber, Influence
+from swir_tracker_ros.kalman.influence import HUBER_K, Huber, Influence
 
 
 @dataclass(frozen=True)
@@ -101,8 +101,8 @@ class AdaptiveNoiseParams:
                                            "max": 500})
     warmup: int = field(default=30, metadata={"doc": "residuals per component before R is adapted; nominal R "
                                                      "until then", "min": 3, "max": 500})
-    k: float = field(default=1.5, metadata={"doc": "Huber threshold used inside eq. 5.93-5.94", "min": 0.1,
-                                            "max": 10.0})
+    k: float = field(default=HUBER_K, metadata={"doc": "Huber threshold used inside eq. 5.93-5.94",
+                                                "min": 0.1, "max": 10.0})
     floor: float = field(default=0.1, metadata={"doc": "lower bound of R_hat as a fraction of the nominal R",
                                                 "min": 0.0, "max": 1.0})
     formula: str = field(default="thesis", metadata={

@@ -51,11 +51,15 @@ def _ret(value: np.ndarray, like: ArrayLike) -> ArrayLike:
     return float(value) if np.ndim(like) == 0 else value
 
 
+HUBER_K = 1.5
+"""Huber threshold Delta of paper 000 eq. 26 / paper 001 eq. 14 ("Huber 1.5"); the package's one default."""
+
+
 @dataclass(frozen=True)
 class Huber:
     """Huber's psi = min(|u|, k) sgn(u) (paper 000 eq. 26, paper 001 eq. 14); k = 1.5 is "Huber 1.5"."""
 
-    k: float = field(default=1.5, metadata={"doc": "saturation threshold Delta", "min": 0.0})
+    k: float = field(default=HUBER_K, metadata={"doc": "saturation threshold Delta", "min": 0.0})
 
     def __post_init__(self) -> None:
         _positive("k", self.k)

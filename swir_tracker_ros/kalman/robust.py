@@ -30,17 +30,17 @@ def robust_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, H:
     A3: alpha = alpha_f (fixed), x = x + K d psi(u);  A4 (= paper 000 eq. 33-34): alpha = w, x = x + K eps;
     P = (I - K h) P (eq. 35 / 22) in a PSD-safe form (see `statlin.scalar_update`).
     Components not in ``robust_components`` (None: all) get the standard update (eq. 16-19).
-    ``influence`` defaults to Huber(1.5). Returns (x, P, RobustInfo); inputs are not modified.
+    ``influence`` defaults to Huber() (k = HUBER_K). Returns (x, P, RobustInfo); inputs are not modified.
     """
     if influence is None:
-        influence = Huber(1.5)
+        influence = Huber()
     return sequential_update(x, P, z, R, H, influence, robust_components, method, alpha_f, threshold)
 
 
 class RobustKalmanFilter(KalmanFilter):
     """M-robust Kalman filter: standard prediction, robust update on chosen components.
 
-    ``RobustKalmanFilter(model_or_F, H=None, Q=None, R=None, *, influence=Huber(1.5),
+    ``RobustKalmanFilter(model_or_F, H=None, Q=None, R=None, *, influence=Huber(),
     robust_components=(0, 1), method="A2", alpha_f=None, G=None, x=None, P=None)``.
     ``robust_components=(0, 1)`` makes the box centre robust and gives the size the standard update
     (paper 000 §IV-B); ``None`` makes every component robust. ``method`` is one of A1-A4
@@ -63,7 +63,7 @@ class RobustKalmanFilter(KalmanFilter):
         comps = None if robust_components is None else tuple(int(j) for j in robust_components)
         if comps is not None and any(j < 0 or j >= m for j in comps):
             raise KalmanError(f"robust_components {comps} out of range for {m} measurement components")
-        self.influence: Influence = Huber(1.5) if influence is None else influence
+        self.influence: Influence = Huber() if influence is None else influence
         self.robust_components = comps
         self.method = method
         self.alpha_f = alpha_f

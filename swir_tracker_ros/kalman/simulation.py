@@ -185,7 +185,7 @@ def run_delta(sc: Scenario, draws: NoiseDraws, delta: float, truth: np.ndarray,
               methods: Sequence[str] = METHODS, influence: Influence | None = None,
               alpha_f: float | None = None) -> DeltaResult:
     """All filters on the same noise at one contamination degree. A3 uses alpha_f = 1 - delta (eq. 26)."""
-    influence = influence or Huber(1.5)
+    influence = influence or Huber()
     y = truth[None, :] + draws.noise(delta, sc.sigma_o2)
     k0, x0, P0 = start_state(y, sc)
     tr = truth[k0:]

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swir_tracker_ros.errors import KalmanError
-from swir_tracker_ros.kalman.influence import Influence
+from swir_tracker_ros.kalman.influence import HUBER_K, Influence
 
 METHODS = ("A1", "A2", "A3", "A4")
 """A1 standard KF; A2 variable alpha_k (paper 001 eq. 28, dissertation eq. 5.52, the recommended one);
@@ -21,7 +21,7 @@ def _phi(x: float) -> float:
     return 0.5 * (1.0 + math.erf(x / math.sqrt(2.0)))
 
 
-def alpha_fixed(delta: float, k: float = 1.5, form: str = "26") -> float:
+def alpha_fixed(delta: float, k: float = HUBER_K, form: str = "26") -> float:
     """Fixed SL coefficient of A3.
 
     ``form="26"``: alpha_f = 1 - delta (paper 001 eq. 26, dissertation eq. 5.50; what the papers simulate).
@@ -37,12 +37,12 @@ def alpha_fixed(delta: float, k: float = 1.5, form: str = "26") -> float:
     raise KalmanError(f"alpha_fixed form must be '26' or '27', got {form!r}")
 
 
-def alpha_optimal_gaussian(sigma: float, k: float = 1.5) -> float:
+def alpha_optimal_gaussian(sigma: float, k: float = HUBER_K) -> float:
     """Exact SL coefficient (eq. 17) E{psi_H(z) z}/sigma^2 = 2 Phi(k/sigma) - 1 for z ~ N(0, sigma^2)."""
     return 2.0 * _phi(k / sigma) - 1.0
 
 
-def alpha_optimal_mixture(delta: float, sigma_o2: float, k: float = 1.5) -> float:
+def alpha_optimal_mixture(delta: float, sigma_o2: float, k: float = HUBER_K) -> float:
     """Exact SL coefficient (paper 001 eq. 17) under the contaminated normal (63), Huber psi."""
     num = (1 - delta) * alpha_optimal_gaussian(1.0, k) + delta * sigma_o2 * alpha_optimal_gaussian(
         math.sqrt(sigma_o2), k)

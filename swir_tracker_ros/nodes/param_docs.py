@@ -8,11 +8,11 @@ is walked into; its fields are named `<prefix><field>.<subfield>`, as the ROS pa
 
 from __future__ import annotations
 
-import dataclasses
-import typing
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
+
+from swir_tracker_ros.paramfield import flat_fields
 
 TABLE_HEADER = ("| name | type | default | range / choices | meaning |", "|---|---|---|---|---|")
 
@@ -40,30 +40,11 @@ class ParamDoc:
         return ""
 
 
-def _default(f: dataclasses.Field) -> Any:
-    if f.default is not dataclasses.MISSING:
-        return f.default
-    if f.default_factory is not dataclasses.MISSING:
-        return f.default_factory()
-    return None
-
-
-def _type_name(annotation: Any) -> str:
-    if isinstance(annotation, type):
-        return annotation.__name__
-    return str(annotation).replace("typing.", "")
-
-
 def walk(cls: type, prefix: str = "") -> Iterator[ParamDoc]:
-    """Every leaf parameter of the dataclass `cls`, depth first in field order, nested dataclasses
-    flattened to dotted names."""
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        kind = hints.get(f.name, f.type)
-        if isinstance(kind, type) and dataclasses.is_dataclass(kind):
-            yield from walk(kind, f"{prefix}{f.name}.")
-            continue
-        yield ParamDoc(prefix + f.name, _type_name(kind), _default(f), dict(f.metadata))
+    """Every leaf parameter of the dataclass `cls` (`paramfield.flat_fields`: depth first in field order,
+    nested dataclasses flattened to dotted names)."""
+    for name, f, default in flat_fields(cls, prefix):
+        yield ParamDoc(name, str(f.type).replace("typing.", ""), default, dict(f.metadata))
 
 
 def usage_lines(cls: type, prefix: str = "") -> list[str]:

@@ -1,5 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Declare a flat parameter dataclass as described, range-checked ROS parameters (docs/interfaces.md)."""
+"""Declare a parameter dataclass as described, range-checked ROS parameters (docs/interfaces.md).
+
+Nested parameter dataclasses become dotted names (`tracker.kcf.padding`); validation is the ROS-free
+`paramfield.validate_params`.
+"""
 
 from __future__ import annotations
 
@@ -25,6 +29,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.paramfield import flat_fields, validate_params
 
 P = TypeVar("P")
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
@@ -77,20 +82,8 @@ def _coerce(kind: type, name: str, value: Any) -> Any:
 
 
 def check_metadata(params: Any, prefix: str = "") -> None:
-    """Raise `ParameterError` when a field breaks its metadata `min` / `max` / `choices` or is not finite."""
-    for f in dataclasses.fields(params):
-        value, meta, name = getattr(params, f.name), f.metadata, prefix + f.name
-        values = value if isinstance(value, (list, tuple)) else [value]
-        for v in values:
-            if isinstance(v, float) and not math.isfinite(v):
-                raise ParameterError(f"parameter {name} must be finite, got {value!r}")
-            if isinstance(v, (int, float)) and not isinstance(v, bool):
-                if "min" in meta and v < meta["min"]:
-                    raise ParameterError(f"parameter {name} = {value!r} is below its minimum {meta['min']}")
-                if "max" in meta and v > meta["max"]:
-                    raise ParameterError(f"parameter {name} = {value!r} is above its maximum {meta['max']}")
-        if "choices" in meta and value not in meta["choices"]:
-            raise ParameterError(f"parameter {name} = {value!r} is not one of {list(meta['choices'])}")
+    """Raise `ParameterError` when a field breaks its metadata (`paramfield.validate_params`, ROS-free)."""
+    validate_params(params, prefix)
 
 
 def describe(f: dataclasses.Field, kind: type, name: str) -> ParameterDescriptor:
@@ -113,10 +106,24 @@ def describe(f: dataclasses.Field, kind: type, name: str) -> ParameterDescriptor
     return desc
 
 
+def _construct(cls: type[P], values: dict[str, Any]) -> P:
+    """cls from dotted leaf values (`kcf.padding`); a nested dataclass field is built from its own leaves."""
+    hints = typing.get_type_hints(cls)
+    kwargs: dict[str, Any] = {}
+    for f in dataclasses.fields(cls):  # type: ignore[arg-type]
+        if dataclasses.is_dataclass(hints[f.name]):
+            head = f.name + "."
+            sub = {k[len(head):]: v for k, v in values.items() if k.startswith(head)}
+            kwargs[f.name] = _construct(hints[f.name], sub)
+        elif f.name in values:
+            kwargs[f.name] = values[f.name]
+    return cls(**kwargs)
+
+
 def _build(cls: type[P], values: dict[str, Any], prefix: str) -> P:
-    """Instance of cls from field values, validated by metadata and by its own `validate()`."""
+    """Instance of cls from (dotted) field values, validated by metadata and by its own `validate()`."""
     try:
-        params = cls(**values)
+        params = _construct(cls, values)
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"parameters {prefix or cls.__name__} cannot be built: {exc}") from exc
     check_metadata(params, prefix)
@@ -146,6 +153,13 @@ def _widen_integer_overrides(node: Node, name: str, kind: type) -> None:
         overrides[name] = Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in param.value])
 
 
+def _leaf_type(cls: type, dotted: str) -> Any:
+    """Annotated type of the leaf field `a.b.c` of cls (through nested dataclasses)."""
+    head, _, rest = dotted.partition(".")
+    kind = typing.get_type_hints(cls)[head]
+    return _leaf_type(kind, rest) if rest else kind
+
+
 def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
                     on_change: Callable[[P], None] | None = None) -> P:
     """Declare every field of the dataclass `cls` as `<prefix><field>`, read and validate the values.
@@ -157,9 +171,11 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
     """
     if not dataclasses.is_dataclass(cls):
         raise ParameterError(f"{cls!r} is not a parameter dataclass")
-    hints = typing.get_type_hints(cls)
-    fields = {prefix + f.name: f for f in dataclasses.fields(cls)}
-    kinds = {name: _base_type(hints[f.name]) for name, f in fields.items()}
+    # every leaf parameter, nested dataclasses flattened to dotted names (`tracker.kcf.padding`)
+    leaves = flat_fields(cls)
+    fields = {prefix + dotted: f for dotted, f, _ in leaves}
+    local = {prefix + dotted: dotted for dotted, _, _ in leaves}
+    kinds = {prefix + dotted: _base_type(_leaf_type(cls, dotted)) for dotted, _, _ in leaves}
     values: dict[str, Any] = {}
     for name, f in fields.items():
         kind = kinds[name]
@@ -178,11 +194,11 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
                 declared = node.declare_parameter(name, default, desc).value
         except (InvalidParameterTypeException, InvalidParameterValueException, ParameterException) as exc:
             raise ParameterError(f"parameter {name} is invalid: {exc}") from exc
-        values[f.name] = _coerce(kind, name, declared)
+        values[local[name]] = _coerce(kind, name, declared)
     current = _build(cls, values, prefix)
 
     def current_values() -> dict[str, Any]:
-        return {f.name: _coerce(kinds[n], n, node.get_parameter(n).value) for n, f in fields.items()}
+        return {local[n]: _coerce(kinds[n], n, node.get_parameter(n).value) for n in fields}
 
     def on_set(params: list[Parameter]) -> SetParametersResult:
         mine = [p for p in params if p.name in fields]
@@ -191,7 +207,7 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
         try:
             candidate = current_values()
             for p in mine:
-                candidate[fields[p.name].name] = _coerce(kinds[p.name], p.name, p.value)
+                candidate[local[p.name]] = _coerce(kinds[p.name], p.name, p.value)
             _build(cls, candidate, prefix)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))

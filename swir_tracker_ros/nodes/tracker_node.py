@@ -7,6 +7,7 @@ import dataclasses
 import sys
 import textwrap
 import time
+import typing
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -366,25 +367,36 @@ def _yaml_value(value: object) -> str:
     return repr(value)
 
 
+def _yaml_fields(cls: type, indent: int) -> list[str]:
+    """Documented `name: default` lines of a params dataclass; a nested dataclass becomes a YAML block."""
+    lines: list[str] = []
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        meta = f.metadata
+        doc = str(meta.get("doc", ""))
+        if dataclasses.is_dataclass(hints[f.name]):
+            lines.append(" " * indent + f"{f.name}:  # {doc}")
+            lines += _yaml_fields(hints[f.name], indent + 2)
+            continue
+        if "choices" in meta:
+            doc += f" {{{', '.join(map(str, meta['choices']))}}}"
+        elif "min" in meta or "max" in meta:
+            doc += f" [{meta.get('min', '-inf')}, {meta.get('max', 'inf')}]"
+        lines += [" " * indent + "# " + part for part in textwrap.wrap(doc, 104 - indent)]
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        lines.append(" " * indent + f"{f.name}: {_yaml_value(default)}")
+    return lines
+
+
 def params_yaml() -> str:
     """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
     lines = ["# Parameters of the `tracker` node (docs/tracker_node.md); `tracker --params-yaml` regenerates",
              "# this file with the defaults. Ranges are enforced; invalid runtime changes are rejected.",
              "# Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml",
              "/**:", "  ros__parameters:"]
-    for cls, indent in ((TrackerNodeParams, 4), (TrackerParams, 6)):
-        if cls is TrackerParams:
-            lines.append("    tracker:  # the tracking core (swir_tracker_ros.tracker.TrackerParams)")
-        for f in dataclasses.fields(cls):
-            meta = f.metadata
-            doc = str(meta.get("doc", ""))
-            if "choices" in meta:
-                doc += f" {{{', '.join(map(str, meta['choices']))}}}"
-            elif "min" in meta or "max" in meta:
-                doc += f" [{meta.get('min', '-inf')}, {meta.get('max', 'inf')}]"
-            lines += [" " * indent + "# " + part for part in textwrap.wrap(doc, 104 - indent)]
-            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-            lines.append(" " * indent + f"{f.name}: {_yaml_value(default)}")
+    lines += _yaml_fields(TrackerNodeParams, 4)
+    lines.append("    tracker:  # the tracking core (swir_tracker_ros.tracker.TrackerParams)")
+    lines += _yaml_fields(TrackerParams, 6)
     return "\n".join(lines) + "\n"
 
 

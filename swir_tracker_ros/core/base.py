@@ -1,16 +1,23 @@
 # SPDX-License-Identifier: Apache-2.0
-"""FilterBank: one correlation filter (KCF or DCF-CA) with its template geometry, in image coordinates."""
+"""`BaseFilter`: one base correlation filter with its template geometry, in image coordinates.
+
+Each base tracker (core/filters.py: paper 000 KCF, dissertation DCF-CA, ...) subclasses it and owns what is
+specific to it: its Params (nested in `TrackerParams`), its filter, its failure test, its confident-update
+gate, its peak -> Huber threshold map and its Kalman box model. `Tracker` selects the subclass once by name.
+"""
 
 from __future__ import annotations
 
+import copy
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
 from swir_tracker_ros.core.confidence import analyse
-from swir_tracker_ros.core.dcf_ca import DCFCA, DCFCAParams, context_offsets
 from swir_tracker_ros.core.features import (
     cosine_window,
     extract_features,
@@ -19,9 +26,9 @@ from swir_tracker_ros.core.features import (
     sample_patches,
     unwindowed_features,
 )
-from swir_tracker_ros.core.kcf import KCF, KCFParams
 from swir_tracker_ros.core.params import TrackerParams
-from swir_tracker_ros.core.windows import search_window, template_size
+from swir_tracker_ros.core.windows import template_size
+from swir_tracker_ros.kalman import BoxModel, ThresholdMap
 from swir_tracker_ros.types import Box
 
 
@@ -38,78 +45,69 @@ class Detection:
     window: Box
 
 
-class FilterBank:
+class BaseFilter(ABC):
     """A correlation filter working on windows resampled to a fixed template (paper 000 Fig. 3).
 
     Every search window, whatever its size in the image, is resized to the template size chosen on the
     first frame (halved for large targets, KCF reference), so the filter always sees the same grid.
+    Subclasses set `name`, `robust_method` and `threshold_map` and implement `_build`, `train`, `failed`,
+    `confident` and `box_model`.
     """
 
+    name: ClassVar[str]
+    robust_method: ClassVar[str]  # statistical linearisation of the robust Kalman update (kalman/statlin.py)
+    threshold_map: ClassVar[ThresholdMap]  # peak -> Huber threshold (paper 000 eq. 38 / dissertation eq. 6.9)
+
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
-        self.kind = p.feature
-        self.cell = 1 if p.feature == "gray" else p.cell_size
+        fp = self.own_params(p)
+        self.fp = fp
+        self.kind = fp.feature
+        self.cell = 1 if fp.feature == "gray" else fp.cell_size
         self.gain = 1.0
-        self.reference_peak = p.dcf_reference_peak
         self.exclusion = max(1, math.ceil(p.psr_exclusion_px / self.cell))
         self.model_scale = (
             0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
         )
-        gray = p.feature == "gray"
-        if p.pipeline == "kcf":
-            self.padding = p.kcf_padding
-            kp = KCFParams(
-                padding=p.kcf_padding,
-                lambda_=p.kcf_lambda,
-                kernel_sigma=p.kcf_kernel_sigma,
-                interp_factor=p.kcf_interp_factor,
-                output_sigma_factor=p.output_sigma_factor,
-                feature=p.feature,
-                cell_size=self.cell,
-            )
-            self.learning_rate = kp.interp_factor
-        else:
-            self.padding = p.dcf_padding
-            dp = DCFCAParams(
-                padding=p.dcf_padding,
-                lambda1=p.dcf_lambda1,
-                lambda2=p.dcf_lambda2,
-                interp_factor=p.dcf_interp_factor,
-                output_sigma_factor=p.output_sigma_factor,
-                feature=p.feature,
-                cell_size=self.cell,
-            )
-            self.learning_rate = dp.interp_factor
+        self.padding = fp.padding
+        self.learning_rate = fp.interp_factor
         self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale)
-        shape = feature_shape(self.kind, self.th, self.tw, self.cell)
-        target_cells = math.sqrt(w * h) * self.model_scale / self.cell
-        if gray and p.pipeline == "kcf":
-            target_cells = math.sqrt(w * h) * self.model_scale
-        self.filter: KCF | DCFCA = (
-            KCF(kp, shape, target_cells) if p.pipeline == "kcf" else DCFCA(dp, shape, target_cells)
-        )
+        self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
+        self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+        self.filter = self._build()
+
+    @classmethod
+    def own_params(cls, p: TrackerParams) -> Any:
+        """This filter's nested Params in `p` (the field named like the pipeline)."""
+        return getattr(p, cls.name)
+
+    @abstractmethod
+    def _build(self) -> Any:
+        """The filter object for feature maps of `self.shape` and a target of `self.target_cells`."""
+
+    @abstractmethod
+    def train(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Learn from the window around `box` with learning rate `rate` (1.0: replace the model)."""
+
+    @abstractmethod
+    def failed(self, det: Detection) -> bool:
+        """Failure (occlusion) test of this pipeline on the normal-mode detection; called once per frame."""
+
+    @abstractmethod
+    def confident(self, det: Detection) -> bool:
+        """Confident-update gate: may the model learn from this (non-failed) frame? Once per such frame."""
+
+    @abstractmethod
+    def box_model(self, w: float, h: float) -> BoxModel:
+        """The Kalman box model of this pipeline for a first box of size w x h."""
+
+    def initialise(self, img: np.ndarray, box: Box) -> None:
+        """First-frame training."""
+        self.gain = 1.0
+        self.train(img, box, 1.0)
 
     def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
         """Windowed feature maps (N, C, rows, cols) of the image regions `windows`."""
         return extract_features(sample_patches(img, windows, self.tw, self.th), self.kind, self.cell)
-
-    def initialise(self, img: np.ndarray, box: Box) -> None:
-        """First-frame training; DCF-CA also calibrates its response gain on its own training sample."""
-        self.gain = 1.0
-        self.train(img, box, 1.0)
-        if isinstance(self.filter, DCFCA) and self.reference_peak > 0:
-            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
-            self_peak = float(self.filter.respond(self.features(img, [win])).max())
-            self.gain = self.reference_peak / self_peak if self_peak > 1e-12 else 1.0
-
-    def train(self, img: np.ndarray, box: Box, rate: float) -> None:
-        """Learn from the window around `box` (DCF-CA: plus 4 context windows one target size away)."""
-        win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
-        if isinstance(self.filter, DCFCA):
-            offs = context_offsets(box.w, box.h, self.filter.params.n_context)
-            feats = self.features(img, [win, *(win.shifted(dx, dy) for dx, dy in offs)])
-            self.filter.train(feats[0], feats[1:], rate)
-        else:
-            self.filter.train(self.features(img, [win])[0], rate)
 
     def grid_geometry(self, window: Box, overlap: float) -> tuple[int, int, list[Box]]:
         """3x3 re-detection grid around `window` with centre steps snapped to whole template cells.
@@ -165,8 +163,34 @@ class FilterBank:
         scales: Sequence[float] | None = None,
     ) -> list[Detection]:
         """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
-        responses = self.filter.respond(self.features(img, windows))
+        feats = self.features(img, windows)
+        self._last_features = feats  # for `memory_score` of the winner (no second feature computation)
+        responses = self.filter.respond(feats)
         return self._detections(responses, windows, scales if scales is not None else [1.0] * len(windows))
+
+    # ------------------------------------------------------------------ long-term memory (LCT style)
+    def start_memory(self) -> None:
+        """Keep a copy of the first-frame filter as the long-term memory of the target.
+
+        Ma et al., "Long-term correlation tracking", CVPR 2015, Sec. 3.2-3.3: a second, conservatively
+        learnt filter whose response measures the confidence of the tracked box; it learns only from
+        frames it finds confident (their eq. 7 threshold), so that a drifting short-term filter cannot
+        teach it the background. Here it verifies every `tracking` frame (core_contract.md item 3).
+        """
+        self.memory = copy.deepcopy(self.filter)
+
+    def memory_score(self, index: int) -> float:
+        """Peak of the memory filter's response on window `index` of the last `detect` call."""
+        resp = self.memory.respond(self._last_features[index : index + 1])[0]
+        return float(resp.max()) * self.gain
+
+    def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Blend the memory with the window around `box` at the (small) rate `rate`."""
+        self.filter, self.memory = self.memory, self.filter
+        try:
+            self.train(img, box, rate)
+        finally:
+            self.filter, self.memory = self.memory, self.filter
 
     def _detections(
         self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]

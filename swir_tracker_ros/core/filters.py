@@ -1,0 +1,128 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The base trackers, one class each, and the registry that `Tracker` selects one from (core_contract.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swir_tracker_ros.core.base import BaseFilter, Detection
+from swir_tracker_ros.core.dcf_ca import DCFCA, context_offsets
+from swir_tracker_ros.core.kcf import KCF
+from swir_tracker_ros.core.params import PIPELINES, TrackerParams
+from swir_tracker_ros.core.windows import search_window
+from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.kalman import DISSERTATION_DCFCA, PAPER000_KCF, BoxModel, dcfca_box_model, kcf_box_model
+from swir_tracker_ros.types import Box
+
+
+class KCFFilter(BaseFilter):
+    """Paper 000 pipeline: KCF on FHOG (eq. 3-8), PSR failure test, peak-gated update, 7-state box model.
+
+    Failure: PSR < `psr_threshold` (paper 000 eq. 10, threshold 7). Update only when the peak exceeds
+    `update_peak_threshold` (0.5). Huber threshold from the peak by eq. 38; robust update A4 (eq. 33-35).
+    """
+
+    name = "kcf"
+    robust_method = "A4"
+    threshold_map = PAPER000_KCF
+
+    def _build(self) -> KCF:
+        return KCF(self.fp, self.shape, self.target_cells)
+
+    def train(self, img: np.ndarray, box: Box, rate: float) -> None:
+        win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+        self.filter.train(self.features(img, [win])[0], rate)
+
+    def failed(self, det: Detection) -> bool:
+        return det.psr < self.fp.psr_threshold
+
+    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+        super().__init__(p, w, h)
+        self._peak_sum = self._apce_sum = 0.0
+        self._n = 0
+
+    def confident(self, det: Detection) -> bool:
+        """Gate `peak`: peak > 0.5 (paper 000). Gate `lmcf` (Wang et al., CVPR 2017, eq. 12): peak >=
+        beta1 x mean peak and APCE >= beta2 x mean APCE, the means over the frames that updated."""
+        fp = self.fp
+        if fp.update_gate == "peak":
+            return det.peak > fp.update_peak_threshold
+        ok = self._n == 0 or (
+            det.peak >= fp.lmcf_peak_ratio * self._peak_sum / self._n
+            and det.apce >= fp.lmcf_apce_ratio * self._apce_sum / self._n
+        )
+        if ok:
+            self._peak_sum += det.peak
+            self._apce_sum += det.apce
+            self._n += 1
+        return ok
+
+    def box_model(self, w: float, h: float) -> BoxModel:
+        return kcf_box_model()
+
+
+class DCFCAFilter(BaseFilter):
+    """Dissertation pipeline: context-aware DCF (eq. 4.90-4.92), APCE tests (eq. 4.96-4.97), 8-state model.
+
+    Failure: APCE <= `apce_occlusion_ratio` x the mean APCE of every frame so far (eq. 4.96); update only
+    when APCE > `apce_update_ratio` x the mean over the non-failed frames (eq. 4.97). Huber threshold from
+    the peak by eq. 6.9; robust update A2 (eq. 5.52). Responses are scaled so that the first-frame
+    self-response peaks at `reference_peak` (ours; see DCFCAParams).
+    """
+
+    name = "dcf_ca"
+    robust_method = "A2"
+    threshold_map = DISSERTATION_DCFCA
+
+    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+        super().__init__(p, w, h)
+        self._apce_sum = self._apce_n = 0.0
+        self._apce_est_sum = self._apce_est_n = 0.0
+
+    def _build(self) -> DCFCA:
+        return DCFCA(self.fp, self.shape, self.target_cells)
+
+    def initialise(self, img: np.ndarray, box: Box) -> None:
+        """First-frame training, then the response gain from the filter's own training sample."""
+        super().initialise(img, box)
+        if self.fp.reference_peak > 0:
+            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+            self_peak = float(self.filter.respond(self.features(img, [win])).max())
+            self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
+
+    def train(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Learn from the window around `box` plus 4 context windows one target size away."""
+        win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+        offs = context_offsets(box.w, box.h, self.fp.n_context)
+        feats = self.features(img, [win, *(win.shifted(dx, dy) for dx, dy in offs)])
+        self.filter.train(feats[0], feats[1:], rate)
+
+    def failed(self, det: Detection) -> bool:
+        mean = self._apce_sum / self._apce_n if self._apce_n else 0.0
+        occluded = self._apce_n > 0 and det.apce <= self.fp.apce_occlusion_ratio * mean
+        self._apce_sum += det.apce  # mean over every frame so far (the thesis does not say which frames)
+        self._apce_n += 1
+        return occluded
+
+    def confident(self, det: Detection) -> bool:
+        mean = self._apce_est_sum / self._apce_est_n if self._apce_est_n else 0.0
+        ok = self._apce_est_n == 0 or det.apce > self.fp.apce_update_ratio * mean
+        self._apce_est_sum += det.apce
+        self._apce_est_n += 1
+        return ok
+
+    def box_model(self, w: float, h: float) -> BoxModel:
+        return dcfca_box_model(w, h)
+
+
+FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter)}
+"""Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
+
+
+def make_filter(p: TrackerParams, w: float, h: float) -> BaseFilter:
+    """The base tracker of `p.pipeline` for a first box of size w x h (ParameterError if unknown)."""
+    try:
+        cls = FILTERS[p.pipeline]
+    except KeyError:
+        raise ParameterError(f"parameter pipeline = {p.pipeline!r} is not one of {list(PIPELINES)}") from None
+    return cls(p, w, h)
