@@ -18,7 +18,7 @@ from swir_tracker_ros.harness.metrics import (
     sre_box,
     sre_boxes,
 )
-from swir_tracker_ros.harness.protocol import RunStats, run_protocol
+from swir_tracker_ros.harness.protocol import ProtocolResult, RunStats, run_protocol
 from swir_tracker_ros.harness.sources import open_source
 from swir_tracker_ros.types import Box
 
@@ -160,6 +160,12 @@ def test_protocol_end_to_end_with_opencv_kcf(tmp_path, sequences_dir):
         assert run is not None and run.init == sre_box(first.gt, p, w, h)
     again = run_protocol([src], [], ["KCF"], ("ope", "sre"), cache_root=tmp_path)
     assert again.stats["otb_crossing"]["opencv_kcf"] == res.stats["otb_crossing"]["opencv_kcf"]
+    back = ProtocolResult.from_json(json.loads(json.dumps(res.to_json())))
+    assert back.stats == res.stats and back.kinds == {"otb_crossing": "real"}
+    said: list[str] = []
+    reused = run_protocol([src], ["robust_adaptive"], [], ("ope", "sre"), progress=said.append, reuse=back)
+    assert said == ["1 (sequence, tracker) results reused"]
+    assert reused.stats["otb_crossing"]["robust_adaptive"] == res.stats["otb_crossing"]["robust_adaptive"]
 
 
 @needs_bench
@@ -172,6 +178,6 @@ def test_compare_protocol_cli_json(tmp_path, sequences_dir, capsys):
     out = capsys.readouterr().out
     assert "OPE real sequences" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
     data = json.loads(js.read_text())
-    assert set(data["summary"]["real"]) == {"cf", "opencv_kcf"}
+    assert set(data["summary"]["real"]) == {"cf", "opencv_kcf"} and data["meta"]["complete"] is True
     assert data["sequences"]["otb_crossing"]["cf"]["ope"]["frames"] == 7
     assert any((tmp_path / "cache").rglob("none-*.json"))

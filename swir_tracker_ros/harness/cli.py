@@ -164,20 +164,37 @@ def _compare_protocol(a: argparse.Namespace) -> int:
     import os
 
     from ..tracker import TrackerParams
-    from .protocol import format_protocol, run_protocol
+    from .protocol import ProtocolResult, format_protocol, run_protocol
 
-    if a.reuse or a.plots or a.curves:
-        raise HarnessError("--reuse, --plots and --curves belong to the plain compare, not to --protocol")
+    if a.plots or a.curves:
+        raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
+    reuse = None
+    for path in a.reuse or []:
+        try:
+            old = ProtocolResult.from_json(json.loads(Path(path).read_text()))
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise HarnessError(f"{path}: cannot reuse this protocol result: {exc}") from None
+        if reuse is None:
+            reuse = old
+        else:
+            for seq, per in old.stats.items():
+                reuse.stats.setdefault(seq, {}).update(per)
     variants = [TrackerParams().variant] if a.tracker is None else a.tracker
     peers = ["KCF", "CSRT"] if a.opencv is None else a.opencv
     cache = None if a.no_peer_cache else (a.peer_cache or os.environ.get("SWIR_PEER_CACHE")
                                           or DEFAULT_PEER_CACHE)
+
+    def write(result: ProtocolResult, complete: bool = False) -> None:
+        if a.json:
+            Path(a.json).parent.mkdir(parents=True, exist_ok=True)
+            result.meta["complete"] = complete
+            Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
+
     result = run_protocol(_sources(a), variants, peers, a.protocol, a.pipeline, a.sre_style, a.jobs, cache,
-                          _progress(a))
+                          _progress(a), reuse, write)
     print(format_protocol(result))
     if a.json:
-        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
+        write(result, complete=True)
         print(f"wrote {a.json}")
     return 0
 
@@ -258,7 +275,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="eval plus OpenCV KCF/CSRT/MOSSE (run in .venv-bench)")
     eval_args(p)
     p.add_argument("--reuse", nargs="+", default=None,
-                   help="JSON results (--json ... --curves) whose rows need not be run again")
+                   help="JSON results (--json ... --curves; with --protocol: protocol JSON) whose rows need "
+                        "not be run again")
     p.add_argument("--opencv", nargs="*", default=None, choices=("KCF", "CSRT", "MOSSE"),
                    help="OpenCV peers (default: KCF CSRT MOSSE; with --protocol: KCF CSRT; empty: none)")
     p.add_argument("--protocol", nargs="+", choices=("ope", "sre"), default=None,

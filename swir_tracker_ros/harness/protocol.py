@@ -162,6 +162,20 @@ class ProtocolResult:
                        sre_runs=len(sre_runs))
         return out
 
+    @classmethod
+    def from_json(cls, data: dict) -> ProtocolResult:
+        """Inverse of `to_json` (for --reuse and re-printing)."""
+        out = cls(tuple(data["protocols"]), trackers=list(data["trackers"]), meta=dict(data.get("meta", {})))
+        for seq, row in data["sequences"].items():
+            out.kinds[seq] = row["kind"]
+            out.stats[seq] = {}
+            for t in out.trackers:
+                runs = {} if row.get(t) is None else dict(row[t].get("sre") or {})
+                if row.get(t) and row[t].get("ope"):
+                    runs["none"] = row[t]["ope"]
+                out.stats[seq][t] = {k: RunStats(**v) for k, v in runs.items()}
+        return out
+
     def to_json(self) -> dict:
         seqs = {}
         for seq, per in self.stats.items():
@@ -192,11 +206,14 @@ def git_commit() -> str:
 def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequence[str],
                  protocols: Sequence[str] = PROTOCOLS, pipeline: str | None = None, style: str = "otb",
                  jobs: int = 1, cache_root: str | Path | None = None,
-                 progress: Callable[[str], None] | None = None) -> ProtocolResult:
+                 progress: Callable[[str], None] | None = None, reuse: ProtocolResult | None = None,
+                 checkpoint: Callable[[ProtocolResult], None] | None = None) -> ProtocolResult:
     """Every tracker (our `variants`, OpenCV `peers`) on every source from every start of `protocols`.
 
     `jobs` > 1 runs the (tracker, source) tasks in a process pool of that size; peer runs are read from and
-    written to the cache at `cache_root` (None: no cache).
+    written to the cache at `cache_root` (None: no cache). A (sequence, tracker) whose every start is in
+    `reuse` (an earlier result, `ProtocolResult.from_json`) is taken from there, not run. `checkpoint` is
+    called with the partial result after every finished task (the CLI rewrites its --json there).
     """
     bad = [p for p in protocols if p not in PROTOCOLS]
     if bad or not protocols:
@@ -228,7 +245,19 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
     result.meta = meta
     for src in sources:
         result.stats[src.name] = {t: {} for t in result.trackers}
-        result.kinds[src.name] = "synth" if src.kind == "synth" else "real"
+        synth = src.kind == "synth" or src.meta.get("kind") == "synth"  # also a bag of `harness synth`
+        result.kinds[src.name] = "synth" if synth else "real"
+    if reuse is not None:
+        kept = []
+        for t in tasks:
+            old = reuse.stats.get(t.source.name, {}).get(t.label, {})
+            if all(k in old for k in t.starts):
+                result.stats[t.source.name][t.label] = {k: old[k] for k in t.starts}
+            else:
+                kept.append(t)
+        if progress and len(kept) < len(tasks):
+            progress(f"{len(tasks) - len(kept)} (sequence, tracker) results reused")
+        tasks = kept
     tasks.sort(key=lambda t: t.order)
 
     def take(r: TaskResult) -> None:
@@ -242,6 +271,8 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
             if aucs:
                 msg += f"  SRE AUC {np.mean(aucs):.3f} [{min(aucs):.3f}, {max(aucs):.3f}]"
             progress(msg + f"  ({r.computed} runs computed, {r.seconds:.0f} s)")
+        if checkpoint:
+            checkpoint(result)
 
     if jobs == 1:
         for t in tasks:
