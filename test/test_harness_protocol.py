@@ -8,7 +8,7 @@ import json
 import pytest
 
 from swir_tracker_ros.harness import cli
-from swir_tracker_ros.harness.compare import BENCH, PeerCache, source_fingerprint
+from swir_tracker_ros.harness.compare import BENCH, PeerCache, bench_python, run_worker, source_fingerprint
 from swir_tracker_ros.harness.evaluate import Run
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
@@ -158,6 +158,9 @@ def test_protocol_end_to_end_with_opencv_kcf(tmp_path, sequences_dir):
     for p in ("none", "top_left", "scale_1.2"):
         run = PeerCache(tmp_path).load(PeerCache.key(opencv, "KCF", src, p))
         assert run is not None and run.init == sre_box(first.gt, p, w, h)
+    box = Box(30.4, 80.0, 20.0, 40.6)  # an explicit start box (bench_worker --init)
+    explicit = run_worker(src, "KCF", bench_python(build=False), init=box)["init"]
+    assert explicit.init == box and explicit.init_index == 0 and len(explicit.pred) == 12
     again = run_protocol([src], [], ["KCF"], ("ope", "sre"), cache_root=tmp_path)
     assert again.stats["otb_crossing"]["opencv_kcf"] == res.stats["otb_crossing"]["opencv_kcf"]
     back = ProtocolResult.from_json(json.loads(json.dumps(res.to_json())))

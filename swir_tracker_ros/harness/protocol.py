@@ -36,7 +36,7 @@ from .sources import Source
 PROTOCOLS = ("ope", "sre")
 PEER_PREFIX = "opencv_"
 REPO = Path(__file__).resolve().parents[2]
-_COST = {"CSRT": 0, "ours": 1, "KCF": 2, "MOSSE": 3}  # slowest tasks first (better packing on --jobs)
+_COST = {"CSRT": 0, "ours": 1, "KCF": 2, "MOSSE": 3}  # slowest peers first (better packing on --jobs)
 
 
 @dataclass
@@ -79,9 +79,9 @@ class Task:
     opencv: str | None = None
 
     @property
-    def order(self) -> tuple[int, int]:
-        """Real sequences first, then the slowest trackers first (better packing on --jobs)."""
-        return (self.source.kind == "synth", _COST.get(self.peer or "ours", 1))
+    def order(self) -> tuple[bool, bool, int]:
+        """Real sequences first; ours before the peers (usually cached); slow peers first (packing)."""
+        return (self.source.kind == "synth", self.peer is not None, _COST.get(self.peer or "ours", 1))
 
 
 @dataclass
