@@ -184,3 +184,28 @@ def test_compare_protocol_cli_json(tmp_path, sequences_dir, capsys):
     assert set(data["summary"]["real"]) == {"cf", "opencv_kcf"} and data["meta"]["complete"] is True
     assert data["sequences"]["otb_crossing"]["cf"]["ope"]["frames"] == 7
     assert any((tmp_path / "cache").rglob("none-*.json"))
+
+
+def test_set_overrides_tracker_parameters():
+    from dataclasses import dataclass, field
+
+    from swir_tracker_ros.errors import HarnessError
+    from swir_tracker_ros.harness.evaluate import _set_path, tracker_params
+
+    p = tracker_params("robust_adaptive", None, ["kcf_padding=2.0", "variant=kalman"])
+    assert p.kcf_padding == 2.0 and p.variant == "kalman"
+    for bad in (["kcf_padding=-1"], ["no_such=1"], ["kcf_padding"], ["kcf_padding=[1"]):
+        with pytest.raises(HarnessError):
+            tracker_params("robust_adaptive", None, bad)
+
+    @dataclass
+    class Inner:
+        padding: float = 1.5
+
+    @dataclass
+    class Outer:
+        kcf: Inner = field(default_factory=Inner)
+
+    assert _set_path(Outer(), ["kcf", "padding"], 2.5, "kcf.padding=2.5").kcf.padding == 2.5  # nested groups
+    with pytest.raises(HarnessError):
+        _set_path(Outer(), ["kcf", "window"], 2.5, "kcf.window=2.5")

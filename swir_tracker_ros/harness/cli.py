@@ -133,7 +133,7 @@ def _progress(a: argparse.Namespace):
 
 def cmd_eval(a: argparse.Namespace) -> int:
     srcs = _sources(a)
-    result = evaluate(srcs, a.tracker or list(VARIANTS), a.pipeline, _progress(a))
+    result = evaluate(srcs, a.tracker or list(VARIANTS), a.pipeline, _progress(a), overrides=a.set or ())
     _finish(result, a)
     return 0
 
@@ -151,7 +151,7 @@ def cmd_compare(a: argparse.Namespace) -> int:
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise HarnessError(f"{path}: cannot reuse this result: {exc}") from None
     variants = list(VARIANTS) if a.tracker is None else a.tracker
-    result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse)
+    result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse, a.set or ())
     for name, per in result.sequences.items():  # reused OpenCV rows
         per.update({k: v for k, v in reuse.sequences.get(name, {}).items() if k.startswith("opencv_")})
     add_opencv(result, srcs, ["KCF", "CSRT", "MOSSE"] if a.opencv is None else a.opencv, _progress(a))
@@ -191,7 +191,7 @@ def _compare_protocol(a: argparse.Namespace) -> int:
             Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
 
     result = run_protocol(_sources(a), variants, peers, a.protocol, a.pipeline, a.sre_style, a.jobs, cache,
-                          _progress(a), reuse, write)
+                          _progress(a), reuse, write, a.set or ())
     print(format_protocol(result))
     if a.json:
         write(result, complete=True)
@@ -260,6 +260,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="variants (default: all; `compare --tracker` alone: OpenCV only)")
         p.add_argument("--pipeline", default=None,
                        help="TrackerParams.pipeline (default: TrackerParams' own default)")
+        p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                       help="override a TrackerParams field for our variants (repeatable; dotted names for "
+                            "nested parameter groups; VALUE parsed as YAML)")
         p.add_argument("--frames", type=int, default=None, help="only the first N frames of each source")
         p.add_argument("--image-topic", default=None)
         p.add_argument("--gt-topic", default=None)

@@ -73,6 +73,7 @@ class Task:
     starts: tuple[str, ...]
     style: str = "otb"
     pipeline: str | None = None
+    overrides: tuple[str, ...] = ()
     peer: str | None = None  # OpenCV tracker name for peers
     cache_root: str | None = None
     bench_py: str | None = None
@@ -98,7 +99,7 @@ def execute(task: Task) -> TaskResult:
     """Run one task (in a pool worker or inline)."""
     t0 = time.perf_counter()
     if task.peer is None:
-        factory = make_tracker_factory(task.label, task.pipeline)
+        factory = make_tracker_factory(task.label, task.pipeline, task.overrides)
         runs = run_starts(task.source, factory, task.starts, task.style)
         computed = len(runs)
     else:
@@ -207,7 +208,8 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
                  protocols: Sequence[str] = PROTOCOLS, pipeline: str | None = None, style: str = "otb",
                  jobs: int = 1, cache_root: str | Path | None = None,
                  progress: Callable[[str], None] | None = None, reuse: ProtocolResult | None = None,
-                 checkpoint: Callable[[ProtocolResult], None] | None = None) -> ProtocolResult:
+                 checkpoint: Callable[[ProtocolResult], None] | None = None,
+                 overrides: Sequence[str] = ()) -> ProtocolResult:
     """Every tracker (our `variants`, OpenCV `peers`) on every source from every start of `protocols`.
 
     `jobs` > 1 runs the (tracker, source) tasks in a process pool of that size; peer runs are read from and
@@ -225,11 +227,12 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
     if jobs < 1:
         raise HarnessError(f"--jobs must be at least 1, got {jobs}")
     starts = (("none",) if "ope" in protocols else ()) + (SRE_PERTURBATIONS if "sre" in protocols else ())
-    for v in variants:  # fail early on a bad variant / pipeline
-        make_tracker_factory(v, pipeline)
-    tasks = [Task(v, src, starts, style, pipeline) for src in sources for v in variants]
+    for v in variants:  # fail early on a bad variant / pipeline / override
+        make_tracker_factory(v, pipeline, overrides)
+    tasks = [Task(v, src, starts, style, pipeline, tuple(overrides)) for src in sources for v in variants]
     result = ProtocolResult(tuple(protocols), trackers=list(variants))
-    meta = {"commit": git_commit(), "style": style, "pipeline": pipeline or "default", "jobs": jobs,
+    meta = {"commit": git_commit(), "style": style, "pipeline": pipeline or "default",
+            "overrides": list(overrides), "jobs": jobs,
             "scored": "frames after the start frame", "peer_cache": str(cache_root) if cache_root else None}
     if peers:
         from .compare import bench_python, opencv_version
@@ -240,7 +243,7 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
             label = PEER_PREFIX + p.lower()
             result.trackers.append(label)
             root = None if cache_root is None else str(cache_root)
-            tasks += [Task(label, src, starts, style, None, p, root, str(py), meta["opencv"])
+            tasks += [Task(label, src, starts, style, None, (), p, root, str(py), meta["opencv"])
                       for src in sources]
     result.meta = meta
     for src in sources:
