@@ -176,8 +176,10 @@ def test_compare_protocol_cli_json(tmp_path, sequences_dir, capsys):
     js = tmp_path / "p.json"
     rc = cli.main(["compare", str(sequences_dir / "otb_crossing"), "--frames", "8", "--protocol", "ope",
                    "--tracker", "cf", "--opencv", "KCF", "--peer-cache", str(tmp_path / "cache"),
-                   "--json", str(js), "--quiet"])
+                   "--json", str(js), "--markdown", str(tmp_path / "p.md"), "--quiet"])
     assert rc == 0
+    md = (tmp_path / "p.md").read_text()
+    assert "| sequence | cf | opencv_kcf |" in md and "| otb_crossing | " in md
     out = capsys.readouterr().out
     assert "OPE real sequences" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
     data = json.loads(js.read_text())

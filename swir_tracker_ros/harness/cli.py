@@ -164,7 +164,7 @@ def _compare_protocol(a: argparse.Namespace) -> int:
     import os
 
     from ..tracker import TrackerParams
-    from .protocol import ProtocolResult, format_protocol, run_protocol
+    from .protocol import ProtocolResult, format_markdown, format_protocol, run_protocol
 
     if a.plots or a.curves:
         raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
@@ -193,6 +193,9 @@ def _compare_protocol(a: argparse.Namespace) -> int:
     result = run_protocol(_sources(a), variants, peers, a.protocol, a.pipeline, a.sre_style, a.jobs, cache,
                           _progress(a), reuse, write, a.set or ())
     print(format_protocol(result))
+    if a.markdown:
+        Path(a.markdown).write_text(format_markdown(result) + "\n")
+        print(f"wrote {a.markdown}")
     if a.json:
         write(result, complete=True)
         print(f"wrote {a.json}")
@@ -292,6 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="--protocol: OpenCV results cache (default: $SWIR_PEER_CACHE or "
                         f"{DEFAULT_PEER_CACHE})")
     p.add_argument("--no-peer-cache", action="store_true", help="--protocol: always run the peers")
+    p.add_argument("--markdown", default=None, help="--protocol: also write the tables as Markdown")
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("replay", help="publish a bag to ROS (with /clock), record /track/*, score")

@@ -346,3 +346,54 @@ def format_protocol(result: ProtocolResult) -> str:
                f"{result.meta.get('style')}, FT = frames in state tracking (OpenCV: ok) with IoU 0; "
                "frames after the start frame scored")
     return "\n".join(out)
+
+
+def format_markdown(result: ProtocolResult) -> str:
+    """The same tables as `format_protocol` in Markdown (for docs and issue notes)."""
+    tr = result.trackers
+    out: list[str] = []
+    for group, seqs in result.groups().items():
+        title = "real sequences" if group == "real" else "synthetic scenarios"
+        head = "| sequence | " + " | ".join(tr) + " |"
+        rule = "|---|" + "---|" * len(tr)
+        if "ope" in result.protocols:
+            out += [f"OPE, {title}: success AUC / P@20 / false-tracking frames", "", head, rule]
+            for s in seqs:
+                cells = []
+                for t in tr:
+                    r = result.stats[s][t].get("none")
+                    cells.append("-" if r is None else
+                                 f"{r.success_auc:.3f} / {r.precision_20:.2f} / {r.false_tracking}")
+                out.append(f"| {s} | " + " | ".join(cells) + " |")
+            out.append("")
+        if "sre" in result.protocols:
+            out += [f"SRE, {title}: success AUC mean [min, max] over the 12 starts", "", head, rule]
+            for s in seqs:
+                cells = []
+                for t in tr:
+                    v = result.sre(s, t)
+                    cells.append("-" if v is None else f"{v['mean']:.3f} [{v['min']:.3f}, {v['max']:.3f}]")
+                out.append(f"| {s} | " + " | ".join(cells) + " |")
+            out.append("")
+        summ = {t: result.summary(t, seqs) for t in tr}
+        out += [f"Means, {title} ({len(seqs)})", "", "| | " + " | ".join(tr) + " |", rule]
+        rows = [("OPE AUC", "ope_auc", ".3f"), ("OPE P@20", "ope_precision_20", ".3f"),
+                ("OPE false tracking", "ope_false_tracking", "d"), ("OPE IoU=0 frames", "ope_zero_iou", "d"),
+                ("SRE AUC", "sre_auc", ".3f"), ("SRE P@20", "sre_precision_20", ".3f"),
+                ("SRE spread", "sre_spread", ".3f"), ("SRE false tracking", "sre_false_tracking", "d"),
+                ("SRE IoU=0 frames", "sre_zero_iou", "d"), ("fps (OPE)", "fps", ".1f")]
+        for name, key, fmt in rows:
+            if any(key in summ[t] for t in tr):
+                out.append(f"| {name} | " + " | ".join(_f(summ[t].get(key), fmt) for t in tr) + " |")
+        if group == "synth":
+            for proto, pre in (("OPE", "ope"), ("SRE", "sre")):
+                if any(f"{pre}_occlusions" in summ[t] for t in tr):
+                    cells = []
+                    for t in tr:
+                        n, k = summ[t].get(f"{pre}_occlusions"), summ[t].get(f"{pre}_survived")
+                        cells.append("-" if not n else f"{k}/{n} ({100.0 * k / n:.0f} %)")
+                    out.append(f"| {proto} occlusions survived | " + " | ".join(cells) + " |")
+        out.append("")
+    out.append(f"commit {result.meta.get('commit')}, OpenCV {result.meta.get('opencv', '-')}, "
+               f"SRE style {result.meta.get('style')}")
+    return "\n".join(out)
