@@ -8,7 +8,7 @@ import json
 import pytest
 
 from swir_tracker_ros.harness import cli
-from swir_tracker_ros.harness.compare import BENCH, PeerCache, source_fingerprint
+from swir_tracker_ros.harness.compare import BENCH, PeerCache, bench_python, run_worker, source_fingerprint
 from swir_tracker_ros.harness.evaluate import Run
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
@@ -18,7 +18,7 @@ from swir_tracker_ros.harness.metrics import (
     sre_box,
     sre_boxes,
 )
-from swir_tracker_ros.harness.protocol import RunStats, run_protocol
+from swir_tracker_ros.harness.protocol import ProtocolResult, RunStats, run_protocol
 from swir_tracker_ros.harness.sources import open_source
 from swir_tracker_ros.types import Box
 
@@ -158,8 +158,17 @@ def test_protocol_end_to_end_with_opencv_kcf(tmp_path, sequences_dir):
     for p in ("none", "top_left", "scale_1.2"):
         run = PeerCache(tmp_path).load(PeerCache.key(opencv, "KCF", src, p))
         assert run is not None and run.init == sre_box(first.gt, p, w, h)
+    box = Box(30.4, 80.0, 20.0, 40.6)  # an explicit start box (bench_worker --init)
+    explicit = run_worker(src, "KCF", bench_python(build=False), init=box)["init"]
+    assert explicit.init == box and explicit.init_index == 0 and len(explicit.pred) == 12
     again = run_protocol([src], [], ["KCF"], ("ope", "sre"), cache_root=tmp_path)
     assert again.stats["otb_crossing"]["opencv_kcf"] == res.stats["otb_crossing"]["opencv_kcf"]
+    back = ProtocolResult.from_json(json.loads(json.dumps(res.to_json())))
+    assert back.stats == res.stats and back.kinds == {"otb_crossing": "real"}
+    said: list[str] = []
+    reused = run_protocol([src], ["robust_adaptive"], [], ("ope", "sre"), progress=said.append, reuse=back)
+    assert said == ["1 (sequence, tracker) results reused"]
+    assert reused.stats["otb_crossing"]["robust_adaptive"] == res.stats["otb_crossing"]["robust_adaptive"]
 
 
 @needs_bench
@@ -167,11 +176,38 @@ def test_compare_protocol_cli_json(tmp_path, sequences_dir, capsys):
     js = tmp_path / "p.json"
     rc = cli.main(["compare", str(sequences_dir / "otb_crossing"), "--frames", "8", "--protocol", "ope",
                    "--tracker", "cf", "--opencv", "KCF", "--peer-cache", str(tmp_path / "cache"),
-                   "--json", str(js), "--quiet"])
+                   "--json", str(js), "--markdown", str(tmp_path / "p.md"), "--quiet"])
     assert rc == 0
+    md = (tmp_path / "p.md").read_text()
+    assert "| sequence | cf | opencv_kcf |" in md and "| otb_crossing | " in md
     out = capsys.readouterr().out
     assert "OPE real sequences" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
     data = json.loads(js.read_text())
-    assert set(data["summary"]["real"]) == {"cf", "opencv_kcf"}
+    assert set(data["summary"]["real"]) == {"cf", "opencv_kcf"} and data["meta"]["complete"] is True
     assert data["sequences"]["otb_crossing"]["cf"]["ope"]["frames"] == 7
     assert any((tmp_path / "cache").rglob("none-*.json"))
+
+
+def test_set_overrides_tracker_parameters():
+    from dataclasses import dataclass, field
+
+    from swir_tracker_ros.errors import HarnessError
+    from swir_tracker_ros.harness.evaluate import _set_path, tracker_params
+
+    p = tracker_params("robust_adaptive", None, ["kcf_padding=2.0", "variant=kalman"])
+    assert p.kcf_padding == 2.0 and p.variant == "kalman"
+    for bad in (["kcf_padding=-1"], ["no_such=1"], ["kcf_padding"], ["kcf_padding=[1"]):
+        with pytest.raises(HarnessError):
+            tracker_params("robust_adaptive", None, bad)
+
+    @dataclass
+    class Inner:
+        padding: float = 1.5
+
+    @dataclass
+    class Outer:
+        kcf: Inner = field(default_factory=Inner)
+
+    assert _set_path(Outer(), ["kcf", "padding"], 2.5, "kcf.padding=2.5").kcf.padding == 2.5  # nested groups
+    with pytest.raises(HarnessError):
+        _set_path(Outer(), ["kcf", "window"], 2.5, "kcf.window=2.5")

@@ -134,7 +134,7 @@ def _progress(a: argparse.Namespace):
 
 def cmd_eval(a: argparse.Namespace) -> int:
     srcs = _sources(a)
-    result = evaluate(srcs, a.tracker or list(VARIANTS), a.pipeline, _progress(a))
+    result = evaluate(srcs, a.tracker or list(VARIANTS), a.pipeline, _progress(a), overrides=a.set or ())
     _finish(result, a)
     return 0
 
@@ -152,7 +152,7 @@ def cmd_compare(a: argparse.Namespace) -> int:
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise HarnessError(f"{path}: cannot reuse this result: {exc}") from None
     variants = list(VARIANTS) if a.tracker is None else a.tracker
-    result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse)
+    result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse, a.set or ())
     for name, per in result.sequences.items():  # reused OpenCV rows
         per.update({k: v for k, v in reuse.sequences.get(name, {}).items() if k.startswith("opencv_")})
     add_opencv(result, srcs, ["KCF", "CSRT", "MOSSE"] if a.opencv is None else a.opencv, _progress(a))
@@ -165,20 +165,40 @@ def _compare_protocol(a: argparse.Namespace) -> int:
     import os
 
     from ..tracker import TrackerParams
-    from .protocol import format_protocol, run_protocol
+    from .protocol import ProtocolResult, format_markdown, format_protocol, run_protocol
 
-    if a.reuse or a.plots or a.curves:
-        raise HarnessError("--reuse, --plots and --curves belong to the plain compare, not to --protocol")
+    if a.plots or a.curves:
+        raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
+    reuse = None
+    for path in a.reuse or []:
+        try:
+            old = ProtocolResult.from_json(json.loads(Path(path).read_text()))
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise HarnessError(f"{path}: cannot reuse this protocol result: {exc}") from None
+        if reuse is None:
+            reuse = old
+        else:
+            for seq, per in old.stats.items():
+                reuse.stats.setdefault(seq, {}).update(per)
     variants = [TrackerParams().variant] if a.tracker is None else a.tracker
     peers = ["KCF", "CSRT"] if a.opencv is None else a.opencv
     cache = None if a.no_peer_cache else (a.peer_cache or os.environ.get("SWIR_PEER_CACHE")
                                           or DEFAULT_PEER_CACHE)
+
+    def write(result: ProtocolResult, complete: bool = False) -> None:
+        if a.json:
+            Path(a.json).parent.mkdir(parents=True, exist_ok=True)
+            result.meta["complete"] = complete
+            Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
+
     result = run_protocol(_sources(a), variants, peers, a.protocol, a.pipeline, a.sre_style, a.jobs, cache,
-                          _progress(a))
+                          _progress(a), reuse, write, a.set or ())
     print(format_protocol(result))
+    if a.markdown:
+        Path(a.markdown).write_text(format_markdown(result) + "\n")
+        print(f"wrote {a.markdown}")
     if a.json:
-        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
+        write(result, complete=True)
         print(f"wrote {a.json}")
     return 0
 
@@ -244,6 +264,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="variants (default: all; `compare --tracker` alone: OpenCV only)")
         p.add_argument("--pipeline", default=None,
                        help="TrackerParams.pipeline (default: TrackerParams' own default)")
+        p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                       help="override a TrackerParams field for our variants (repeatable; dotted names for "
+                            "nested parameter groups; VALUE parsed as YAML)")
         p.add_argument("--frames", type=int, default=None, help="only the first N frames of each source")
         p.add_argument("--image-topic", default=None)
         p.add_argument("--gt-topic", default=None)
@@ -259,7 +282,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="eval plus OpenCV KCF/CSRT/MOSSE (run in .venv-bench)")
     eval_args(p)
     p.add_argument("--reuse", nargs="+", default=None,
-                   help="JSON results (--json ... --curves) whose rows need not be run again")
+                   help="JSON results (--json ... --curves; with --protocol: protocol JSON) whose rows need "
+                        "not be run again")
     p.add_argument("--opencv", nargs="*", default=None, choices=("KCF", "CSRT", "MOSSE"),
                    help="OpenCV peers (default: KCF CSRT MOSSE; with --protocol: KCF CSRT; empty: none)")
     p.add_argument("--protocol", nargs="+", choices=("ope", "sre"), default=None,
@@ -272,6 +296,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="--protocol: OpenCV results cache (default: $SWIR_PEER_CACHE or "
                         f"{DEFAULT_PEER_CACHE})")
     p.add_argument("--no-peer-cache", action="store_true", help="--protocol: always run the peers")
+    p.add_argument("--markdown", default=None, help="--protocol: also write the tables as Markdown")
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("replay", help="publish a bag to ROS (with /clock), record /track/*, score")

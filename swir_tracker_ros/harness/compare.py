@@ -151,7 +151,8 @@ class PeerCache:
         fd, tmp = tempfile.mkstemp(dir=p.parent, suffix=".tmp")
         with os.fdopen(fd, "w") as f:
             json.dump(one, f)
-        os.replace(tmp, p)
+        os.chmod(tmp, 0o644)  # mkstemp makes it private; the cache is shared between worktrees
+        os.replace(tmp, p)  # atomic: concurrent runs never see half a file
 
 
 def peer_runs(src: Source, tracker: str, starts: Sequence[str], style: str, cache: PeerCache, py: Path,

@@ -36,7 +36,7 @@ from .sources import Source
 PROTOCOLS = ("ope", "sre")
 PEER_PREFIX = "opencv_"
 REPO = Path(__file__).resolve().parents[2]
-_COST = {"CSRT": 0, "ours": 1, "KCF": 2, "MOSSE": 3}  # slowest tasks first (better packing on --jobs)
+_COST = {"CSRT": 0, "ours": 1, "KCF": 2, "MOSSE": 3}  # slowest peers first (better packing on --jobs)
 
 
 @dataclass
@@ -73,15 +73,16 @@ class Task:
     starts: tuple[str, ...]
     style: str = "otb"
     pipeline: str | None = None
+    overrides: tuple[str, ...] = ()
     peer: str | None = None  # OpenCV tracker name for peers
     cache_root: str | None = None
     bench_py: str | None = None
     opencv: str | None = None
 
     @property
-    def order(self) -> tuple[int, int]:
-        """Real sequences first, then the slowest trackers first (better packing on --jobs)."""
-        return (self.source.kind == "synth", _COST.get(self.peer or "ours", 1))
+    def order(self) -> tuple[bool, bool, int]:
+        """Real sequences first; ours before the peers (usually cached); slow peers first (packing)."""
+        return (self.source.kind == "synth", self.peer is not None, _COST.get(self.peer or "ours", 1))
 
 
 @dataclass
@@ -98,7 +99,7 @@ def execute(task: Task) -> TaskResult:
     """Run one task (in a pool worker or inline)."""
     t0 = time.perf_counter()
     if task.peer is None:
-        factory = make_tracker_factory(task.label, task.pipeline)
+        factory = make_tracker_factory(task.label, task.pipeline, task.overrides)
         runs = run_starts(task.source, factory, task.starts, task.style)
         computed = len(runs)
     else:
@@ -162,6 +163,20 @@ class ProtocolResult:
                        sre_runs=len(sre_runs))
         return out
 
+    @classmethod
+    def from_json(cls, data: dict) -> ProtocolResult:
+        """Inverse of `to_json` (for --reuse and re-printing)."""
+        out = cls(tuple(data["protocols"]), trackers=list(data["trackers"]), meta=dict(data.get("meta", {})))
+        for seq, row in data["sequences"].items():
+            out.kinds[seq] = row["kind"]
+            out.stats[seq] = {}
+            for t in out.trackers:
+                runs = {} if row.get(t) is None else dict(row[t].get("sre") or {})
+                if row.get(t) and row[t].get("ope"):
+                    runs["none"] = row[t]["ope"]
+                out.stats[seq][t] = {k: RunStats(**v) for k, v in runs.items()}
+        return out
+
     def to_json(self) -> dict:
         seqs = {}
         for seq, per in self.stats.items():
@@ -192,11 +207,15 @@ def git_commit() -> str:
 def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequence[str],
                  protocols: Sequence[str] = PROTOCOLS, pipeline: str | None = None, style: str = "otb",
                  jobs: int = 1, cache_root: str | Path | None = None,
-                 progress: Callable[[str], None] | None = None) -> ProtocolResult:
+                 progress: Callable[[str], None] | None = None, reuse: ProtocolResult | None = None,
+                 checkpoint: Callable[[ProtocolResult], None] | None = None,
+                 overrides: Sequence[str] = ()) -> ProtocolResult:
     """Every tracker (our `variants`, OpenCV `peers`) on every source from every start of `protocols`.
 
     `jobs` > 1 runs the (tracker, source) tasks in a process pool of that size; peer runs are read from and
-    written to the cache at `cache_root` (None: no cache).
+    written to the cache at `cache_root` (None: no cache). A (sequence, tracker) whose every start is in
+    `reuse` (an earlier result, `ProtocolResult.from_json`) is taken from there, not run. `checkpoint` is
+    called with the partial result after every finished task (the CLI rewrites its --json there).
     """
     bad = [p for p in protocols if p not in PROTOCOLS]
     if bad or not protocols:
@@ -208,11 +227,12 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
     if jobs < 1:
         raise HarnessError(f"--jobs must be at least 1, got {jobs}")
     starts = (("none",) if "ope" in protocols else ()) + (SRE_PERTURBATIONS if "sre" in protocols else ())
-    for v in variants:  # fail early on a bad variant / pipeline
-        make_tracker_factory(v, pipeline)
-    tasks = [Task(v, src, starts, style, pipeline) for src in sources for v in variants]
+    for v in variants:  # fail early on a bad variant / pipeline / override
+        make_tracker_factory(v, pipeline, overrides)
+    tasks = [Task(v, src, starts, style, pipeline, tuple(overrides)) for src in sources for v in variants]
     result = ProtocolResult(tuple(protocols), trackers=list(variants))
-    meta = {"commit": git_commit(), "style": style, "pipeline": pipeline or "default", "jobs": jobs,
+    meta = {"commit": git_commit(), "style": style, "pipeline": pipeline or "default",
+            "overrides": list(overrides), "jobs": jobs,
             "scored": "frames after the start frame", "peer_cache": str(cache_root) if cache_root else None}
     if peers:
         from .compare import bench_python, opencv_version
@@ -223,12 +243,24 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
             label = PEER_PREFIX + p.lower()
             result.trackers.append(label)
             root = None if cache_root is None else str(cache_root)
-            tasks += [Task(label, src, starts, style, None, p, root, str(py), meta["opencv"])
+            tasks += [Task(label, src, starts, style, None, (), p, root, str(py), meta["opencv"])
                       for src in sources]
     result.meta = meta
     for src in sources:
         result.stats[src.name] = {t: {} for t in result.trackers}
-        result.kinds[src.name] = "synth" if src.kind == "synth" else "real"
+        synth = src.kind == "synth" or src.meta.get("kind") == "synth"  # also a bag of `harness synth`
+        result.kinds[src.name] = "synth" if synth else "real"
+    if reuse is not None:
+        kept = []
+        for t in tasks:
+            old = reuse.stats.get(t.source.name, {}).get(t.label, {})
+            if all(k in old for k in t.starts):
+                result.stats[t.source.name][t.label] = {k: old[k] for k in t.starts}
+            else:
+                kept.append(t)
+        if progress and len(kept) < len(tasks):
+            progress(f"{len(tasks) - len(kept)} (sequence, tracker) results reused")
+        tasks = kept
     tasks.sort(key=lambda t: t.order)
 
     def take(r: TaskResult) -> None:
@@ -242,6 +274,8 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
             if aucs:
                 msg += f"  SRE AUC {np.mean(aucs):.3f} [{min(aucs):.3f}, {max(aucs):.3f}]"
             progress(msg + f"  ({r.computed} runs computed, {r.seconds:.0f} s)")
+        if checkpoint:
+            checkpoint(result)
 
     if jobs == 1:
         for t in tasks:
@@ -311,4 +345,55 @@ def format_protocol(result: ProtocolResult) -> str:
     out.append(f"commit {result.meta.get('commit')}, OpenCV {result.meta.get('opencv', '-')}, SRE style "
                f"{result.meta.get('style')}, FT = frames in state tracking (OpenCV: ok) with IoU 0; "
                "frames after the start frame scored")
+    return "\n".join(out)
+
+
+def format_markdown(result: ProtocolResult) -> str:
+    """The same tables as `format_protocol` in Markdown (for docs and issue notes)."""
+    tr = result.trackers
+    out: list[str] = []
+    for group, seqs in result.groups().items():
+        title = "real sequences" if group == "real" else "synthetic scenarios"
+        head = "| sequence | " + " | ".join(tr) + " |"
+        rule = "|---|" + "---|" * len(tr)
+        if "ope" in result.protocols:
+            out += [f"OPE, {title}: success AUC / P@20 / false-tracking frames", "", head, rule]
+            for s in seqs:
+                cells = []
+                for t in tr:
+                    r = result.stats[s][t].get("none")
+                    cells.append("-" if r is None else
+                                 f"{r.success_auc:.3f} / {r.precision_20:.2f} / {r.false_tracking}")
+                out.append(f"| {s} | " + " | ".join(cells) + " |")
+            out.append("")
+        if "sre" in result.protocols:
+            out += [f"SRE, {title}: success AUC mean [min, max] over the 12 starts", "", head, rule]
+            for s in seqs:
+                cells = []
+                for t in tr:
+                    v = result.sre(s, t)
+                    cells.append("-" if v is None else f"{v['mean']:.3f} [{v['min']:.3f}, {v['max']:.3f}]")
+                out.append(f"| {s} | " + " | ".join(cells) + " |")
+            out.append("")
+        summ = {t: result.summary(t, seqs) for t in tr}
+        out += [f"Means, {title} ({len(seqs)})", "", "| | " + " | ".join(tr) + " |", rule]
+        rows = [("OPE AUC", "ope_auc", ".3f"), ("OPE P@20", "ope_precision_20", ".3f"),
+                ("OPE false tracking", "ope_false_tracking", "d"), ("OPE IoU=0 frames", "ope_zero_iou", "d"),
+                ("SRE AUC", "sre_auc", ".3f"), ("SRE P@20", "sre_precision_20", ".3f"),
+                ("SRE spread", "sre_spread", ".3f"), ("SRE false tracking", "sre_false_tracking", "d"),
+                ("SRE IoU=0 frames", "sre_zero_iou", "d"), ("fps (OPE)", "fps", ".1f")]
+        for name, key, fmt in rows:
+            if any(key in summ[t] for t in tr):
+                out.append(f"| {name} | " + " | ".join(_f(summ[t].get(key), fmt) for t in tr) + " |")
+        if group == "synth":
+            for proto, pre in (("OPE", "ope"), ("SRE", "sre")):
+                if any(f"{pre}_occlusions" in summ[t] for t in tr):
+                    cells = []
+                    for t in tr:
+                        n, k = summ[t].get(f"{pre}_occlusions"), summ[t].get(f"{pre}_survived")
+                        cells.append("-" if not n else f"{k}/{n} ({100.0 * k / n:.0f} %)")
+                    out.append(f"| {proto} occlusions survived | " + " | ".join(cells) + " |")
+        out.append("")
+    out.append(f"commit {result.meta.get('commit')}, OpenCV {result.meta.get('opencv', '-')}, "
+               f"SRE style {result.meta.get('style')}")
     return "\n".join(out)
