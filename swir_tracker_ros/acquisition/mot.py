@@ -114,6 +114,7 @@ class Track:
     matched: bool = True
     partial_run: int = 0  # consecutive partial updates (motion.visible_edges)
     last_box: Box = field(default_factory=lambda: Box(0, 0, 1, 1))
+    output_detection: bool = True  # MotParams.output_detection
 
     @property
     def predicted(self) -> Box:
@@ -121,6 +122,14 @@ class Track:
 
     @property
     def box(self) -> Box:
+        return box_from_state(self.x)
+
+    @property
+    def output_box(self) -> Box:
+        """The box published for this track: the detection it was matched to this frame when that detection
+        showed the whole target (as SORT and ByteTrack publish), else the filtered state."""
+        if self.matched and self.partial_run == 0 and self.output_detection:
+            return self.last_box
         return box_from_state(self.x)
 
     @property
