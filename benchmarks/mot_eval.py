@@ -151,7 +151,8 @@ def score(gts: list[list[tuple[int, Box]]], hyps: list[list[Hyp]], times_s: list
                   1000.0 * float(np.mean(times_s)) if times_s else 0.0, len(gts), causes)
 
 
-def fp_causes(acc: mm.MOTAccumulator, gts: list[list[tuple[int, Box]]], hyps: list[list[Hyp]]) -> dict[str, int]:
+def fp_causes(acc: mm.MOTAccumulator, gts: list[list[tuple[int, Box]]],
+              hyps: list[list[Hyp]]) -> dict[str, int]:
     """Count motmetrics' false positives per cause (CAUSES, checked in order)."""
     ev = acc.mot_events
     out = dict.fromkeys(CAUSES, 0)
@@ -240,7 +241,8 @@ def peer_configs() -> list[dict]:
             cfgs.append({"name": f"ByteTrack activation {a} high {hi}", "tracker": "bytetrack",
                          "kwargs": {"track_activation_threshold": a, "high_conf_det_threshold": hi}})
     for hi in (0.1, 0.2, 0.3, 0.4, 0.5, 0.6):
-        cfgs.append({"name": f"OC-SORT high {hi}", "tracker": "ocsort", "kwargs": {"high_conf_det_threshold": hi}})
+        cfgs.append({"name": f"OC-SORT high {hi}", "tracker": "ocsort",
+                     "kwargs": {"high_conf_det_threshold": hi}})
     return cfgs
 
 

@@ -53,7 +53,8 @@ def main(argv: list[str]) -> int:
         return 2
     with open(argv[0]) as f:
         job = json.load(f)
-    res = {c["name"]: run(job["frames"], c["tracker"], c["kwargs"], job["frame_rate"]) for c in job["configs"]}
+    res = {c["name"]: run(job["frames"], c["tracker"], c["kwargs"], job["frame_rate"])
+           for c in job["configs"]}
     with open(argv[1], "w") as f:
         json.dump(res, f)
     return 0
