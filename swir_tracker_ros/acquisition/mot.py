@@ -70,13 +70,15 @@ class MotParams:
     partial_max_run: int = _f(5, "after this many partial updates in a row a track is updated in full "
                               "again: a change of size that lasts is the target's (5 hits, as confirm_hits)",
                               1, 1000)
-    confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits", 0, 100)
+    confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits (paper 004: 5; "
+                            "SORT's min_hits: 3)", 0, 100)
     tentative_max_miss: int = _f(5, "a tentative track missed this many frames is deleted", 1, 100)
     history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
     drift_threshold: int = _f(15, "a drifting track missed this many more frames is deleted", 1, 1000)
-    display_max_miss: int = _f(0, "a confirmed track is output while missed at most this many frames "
-                               "(the paper shows it until it drifts, 20; SORT and ByteTrack only while "
-                               "matched, 0: coasting boxes are mostly false positives)", 0, 1000)
+    display_max_miss: int = _f(1, "a confirmed track is output while missed at most this many frames "
+                               "(the paper shows it until it drifts, 20, and those boxes are mostly false "
+                               "positives; SORT and ByteTrack only while matched, 0; 1 bridges one missed "
+                               "detection)", 0, 1000)
     output_detection: bool = _f(False, "publish a matched track with the detection it was matched to "
                                 "(as SORT and ByteTrack do) instead of the filtered box")
     history_len: int = _f(10, "positions kept for the motion pattern", 2, 100)
