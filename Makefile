@@ -6,13 +6,15 @@ STAMP   := $(VENV)/.installed
 BENCH   := .venv-bench
 BSTAMP  := $(BENCH)/.installed
 TRAIN   := .venv-train
+MOTV    := .venv-mot
+MSTAMP  := $(MOTV)/.installed
 TSTAMP  := $(TRAIN)/.installed
 PIP_FLAGS ?= --disable-pip-version-check -q
 
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PYTHONDONTWRITEBYTECODE = 1
 
-.PHONY: venv test lint demo bench bench-venv train-venv regress train clean
+.PHONY: venv test lint demo bench bench-venv mot-venv train-venv regress train clean
 
 venv: $(STAMP)
 
@@ -28,6 +30,15 @@ bench-venv: $(BSTAMP)
 $(BSTAMP): requirements-bench.txt
 	test -x $(BENCH)/bin/python || $(PY) -m venv $(BENCH)
 	$(BENCH)/bin/python -m pip install $(PIP_FLAGS) -r requirements-bench.txt
+	touch $@
+
+# MOT peers (SORT, ByteTrack, OC-SORT of `trackers`) for benchmarks/mot_eval.py: own venv, --no-deps with
+# the full pinned set of requirements-mot.txt (its opencv-python is swapped for the headless build).
+mot-venv: $(MSTAMP)
+
+$(MSTAMP): requirements-mot.txt
+	test -x $(MOTV)/bin/python || $(PY) -m venv $(MOTV)
+	$(MOTV)/bin/python -m pip install $(PIP_FLAGS) --no-deps -r requirements-mot.txt
 	touch $@
 
 # Training-only venv (PyTorch CPU) for the Siamese appearance nets; the runtime never needs it.

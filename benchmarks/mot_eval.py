@@ -15,10 +15,13 @@ gate_chi2) and prints mean, sd and range: how much one setting's score on that s
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import cv2
@@ -36,7 +39,7 @@ from swir_tracker_ros.acquisition.detectors import (  # noqa: E402
     MotDetFile,
     MotionDetector,
 )
-from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker  # noqa: E402
+from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker, TrackStatus  # noqa: E402
 from swir_tracker_ros.acquisition.siamese import SiameseFamily  # noqa: E402
 from swir_tracker_ros.types import Box  # noqa: E402
 
@@ -67,6 +70,27 @@ class Result:
     precision: float
     assoc_ms: float
     frames: int
+    causes: dict[str, int] = field(default_factory=dict)  # false output boxes by cause (CAUSES)
+
+
+# Why an output box is a false positive (motmetrics FP event), checked in this order:
+CAUSES = ("tentative", "coasting", "duplicate", "lagging", "false detection")
+# tentative: the track is not confirmed; coasting: the track had no detection this frame (its box is the
+# prediction); duplicate: the box covers (IoU >= 0.5) a person another output box is matched to; lagging: the
+# track's detection this frame covers a person but the output (filtered) box does not; false detection:
+# the box follows a detection that covers nobody (a detector false positive or a box at the wrong scale).
+
+
+@dataclass
+class HypInfo:
+    """What the scorer needs to know about an output box to give a false positive its cause."""
+
+    tentative: bool = False
+    coasting: bool = False
+    det_box: Box | None = None  # the detection the track was matched to this frame
+
+
+Hyp = tuple[int, Box, HypInfo]
 
 
 def tud_frames(seq: Path = TUD) -> Iterator[Frame]:
@@ -110,34 +134,76 @@ def iou_distance(gt: list[Box], hyp: list[Box], max_d: float = 0.5) -> np.ndarra
     return d
 
 
-def evaluate(frames: Iterable[Frame], detector: Detector, tracker: MultiTargetTracker | None) -> Result:
-    """Run detector (+ tracker) over frames and score with motmetrics (IoU distance, match at IoU >= 0.5).
-    Without a tracker the raw detections are scored (each gets a fresh ID: IDF1/IDSW meaningless)."""
+def score(gts: list[list[tuple[int, Box]]], hyps: list[list[Hyp]], times_s: list[float]) -> Result:
+    """motmetrics over a whole run (IoU distance, a match needs IoU >= 0.5) and the cause of every false
+    positive output box (CAUSES)."""
     acc = mm.MOTAccumulator(auto_id=True)
-    times = []
-    n = 0
-    fresh = 10**6
-    for img, gt in frames:
-        dets = detector.detect(img)
-        if tracker is None:
-            hyp = []
-            for d in dets:
-                fresh += 1
-                hyp.append((fresh, d.box))
-        else:
-            tracks = tracker.step(img, dets)
-            times.append(tracker.last_timing_s)
-            hyp = [(t.id, t.box) for t in tracks]
-        dist = iou_distance([b for _, b in gt], [b for _, b in hyp])
-        acc.update([i for i, _ in gt], [i for i, _ in hyp], dist)
-        n += 1
+    for gt, hyp in zip(gts, hyps):
+        acc.update([i for i, _ in gt], [i for i, _, _ in hyp], iou_distance([b for _, b in gt],
+                                                                             [b for _, b, _ in hyp]))
     mh = mm.metrics.create()
     s = mh.compute(acc, metrics=["mota", "motp", "idf1", "num_switches", "recall", "precision"], name="x")
     row = s.loc["x"]
     motp = 1.0 - float(row["motp"]) if np.isfinite(row["motp"]) else 0.0
+    causes = fp_causes(acc, gts, hyps)
     return Result(float(row["mota"]), motp, float(row["idf1"]), int(row["num_switches"]),
                   float(row["recall"]), float(row["precision"]),
-                  1000.0 * float(np.mean(times)) if times else 0.0, n)
+                  1000.0 * float(np.mean(times_s)) if times_s else 0.0, len(gts), causes)
+
+
+def fp_causes(acc: mm.MOTAccumulator, gts: list[list[tuple[int, Box]]],
+              hyps: list[list[Hyp]]) -> dict[str, int]:
+    """Count motmetrics' false positives per cause (CAUSES, checked in order)."""
+    ev = acc.mot_events
+    out = dict.fromkeys(CAUSES, 0)
+    if ev.empty:
+        return out
+    ev = ev.reset_index()
+    fps = ev[ev["Type"] == "FP"]
+    matched = ev[ev["Type"].isin(["MATCH", "SWITCH"])]
+    matched_gt = {(int(f), int(o)) for f, o in zip(matched["FrameId"], matched["OId"])}
+    for f, hid in zip(fps["FrameId"], fps["HId"]):
+        f = int(f)
+        _, box, info = next(h for h in hyps[f] if h[0] == int(hid))
+        gt = gts[f]
+        if info.tentative:
+            cause = "tentative"
+        elif info.coasting:
+            cause = "coasting"
+        elif any(box.iou(g) >= 0.5 and (f, gid) in matched_gt for gid, g in gt):
+            cause = "duplicate"
+        elif info.det_box is not None and any(info.det_box.iou(g) >= 0.5 for _, g in gt):
+            cause = "lagging"
+        else:
+            cause = "false detection"
+        out[cause] += 1
+    return out
+
+
+def evaluate(frames: Iterable[Frame], detector: Detector, tracker: MultiTargetTracker | None) -> Result:
+    """Run detector (+ tracker) over frames and score with motmetrics (IoU distance, match at IoU >= 0.5).
+    Without a tracker the raw detections are scored (each gets a fresh ID: IDF1/IDSW meaningless)."""
+    times: list[float] = []
+    gts: list[list[tuple[int, Box]]] = []
+    hyps: list[list[Hyp]] = []
+    fresh = 10**6
+    for img, gt in frames:
+        dets = detector.detect(img)
+        hyp: list[Hyp] = []
+        if tracker is None:
+            for d in dets:
+                fresh += 1
+                hyp.append((fresh, d.box, HypInfo(det_box=d.box)))
+        else:
+            tracks = tracker.step(img, dets)
+            times.append(tracker.last_timing_s)
+            for t in tracks:
+                info = HypInfo(tentative=t.status is TrackStatus.TENTATIVE, coasting=not t.matched,
+                               det_box=t.last_box if t.matched else None)
+                hyp.append((t.id, t.output_box, info))
+        gts.append(gt)
+        hyps.append(hyp)
+    return score(gts, hyps, times)
 
 
 class Replay:
@@ -155,10 +221,72 @@ class Replay:
         return self.dets[self.k - 1]
 
 
+PEER_PY = REPO / ".venv-mot" / "bin" / "python"
+FRAME_RATE = 25.0  # TUD-Campus (MOT15) frame rate; the peers scale their lost-track buffers by it
+
+
+def peer_configs() -> list[dict]:
+    """The peers of the `trackers` package, each with its defaults and with a small grid over its confidence
+    thresholds (the table keeps the defaults and the grid's best, chosen on the table itself: an advantage
+    the peers get and our rows do not). Scores reach the peers as our trackers see them, in [0, 1]
+    (det.txt: ACF score / 100, clipped)."""
+    cfgs = [{"name": "SORT", "tracker": "sort", "kwargs": {}},
+            {"name": "ByteTrack", "tracker": "bytetrack", "kwargs": {}},
+            {"name": "OC-SORT", "tracker": "ocsort", "kwargs": {}}]
+    for a in (0.0, 0.1, 0.2, 0.3, 0.4, 0.5):
+        cfgs.append({"name": f"SORT activation {a}", "tracker": "sort",
+                     "kwargs": {"track_activation_threshold": a}})
+    for a in (0.2, 0.3, 0.4, 0.5):
+        for hi in (0.2, 0.3, 0.4, 0.5, 0.6):
+            cfgs.append({"name": f"ByteTrack activation {a} high {hi}", "tracker": "bytetrack",
+                         "kwargs": {"track_activation_threshold": a, "high_conf_det_threshold": hi}})
+    for hi in (0.1, 0.2, 0.3, 0.4, 0.5, 0.6):
+        cfgs.append({"name": f"OC-SORT high {hi}", "tracker": "ocsort",
+                     "kwargs": {"high_conf_det_threshold": hi}})
+    return cfgs
+
+
+def run_peers(gts: list[list[tuple[int, Box]]], dets: list[list[Detection]]) -> dict[str, Result]:
+    """Every peer configuration on the same detections (subprocess in the peer venv), scored by `score`."""
+    if not PEER_PY.exists():
+        print(f"# peers skipped: {PEER_PY} missing (make mot-venv)", file=sys.stderr)
+        return {}
+    job = {"frame_rate": FRAME_RATE, "configs": peer_configs(),
+           "frames": [[[d.box.x, d.box.y, d.box.w, d.box.h, d.score] for d in fd] for fd in dets]}
+    with tempfile.TemporaryDirectory() as tmp:
+        src, dst = Path(tmp) / "in.json", Path(tmp) / "out.json"
+        src.write_text(json.dumps(job))
+        subprocess.run([str(PEER_PY), str(REPO / "benchmarks" / "mot_peers.py"), str(src), str(dst)],
+                       check=True)
+        res = json.loads(dst.read_text())
+    out = {}
+    for name, r in res.items():
+        hyps = [[(int(i), Box(x, y, w, h), HypInfo(det_box=Box(x, y, w, h))) for i, x, y, w, h in fr]
+                for fr in r["tracks"]]
+        out[name] = score(gts, hyps, [])
+        out[name].assoc_ms = r["ms"]
+    return out
+
+
+def pick_peers(res: dict[str, Result]) -> dict[str, Result]:
+    """Keep our rows, each peer's defaults and each peer's best grid setting (by MOTA, then IDF1)."""
+    out = {k: v for k, v in res.items() if not k.startswith(("SORT", "ByteTrack", "OC-SORT"))}
+    for peer in ("SORT", "ByteTrack", "OC-SORT"):
+        if peer not in res:
+            continue
+        out[f"{peer} (defaults)"] = res[peer]
+        grid = {k: v for k, v in res.items() if k == peer or k.startswith(peer + " ")}
+        best = max(grid, key=lambda k: (grid[k].mota, grid[k].idf1))
+        if best != peer:
+            out[f"{best} (best of {len(grid)})"] = grid[best]
+    return out
+
+
 def ablation(make_frames: Callable[[], Iterable[Frame]], detector: Detector,
              siamese: SiameseFamily, base: MotParams | None = None,
-             rows: dict[str, dict] | None = None) -> dict[str, Result]:
-    """One Result per ablation row (plus 'object detector': the detections alone)."""
+             rows: dict[str, dict] | None = None, peers: bool = True) -> dict[str, Result]:
+    """One Result per ablation row (plus 'object detector': the detections alone, and every peer
+    configuration on the same detections)."""
     base = base or MotParams()
     replay = Replay(make_frames(), detector)
     out = {"object detector": evaluate(make_frames(), replay, None)}
@@ -166,6 +294,8 @@ def ablation(make_frames: Callable[[], Iterable[Frame]], detector: Detector,
         replay.reset()
         params = replace(base, **flags)
         out[name] = evaluate(make_frames(), replay, MultiTargetTracker(params, siamese))
+    if peers:
+        out.update(run_peers([gt for _, gt in make_frames()], replay.dets))
     return out
 
 
@@ -204,11 +334,13 @@ def pooled(results: list[dict[str, Result]]) -> dict[str, Result]:
         w = np.array([r.frames for r in rs], float)
         avg = {f: float(np.average([getattr(r, f) for r in rs], weights=w))
                for f in ("mota", "motp", "idf1", "recall", "precision", "assoc_ms")}
-        out[key] = Result(**avg, idsw=sum(r.idsw for r in rs), frames=int(w.sum()))
+        causes = {c: sum(r.causes.get(c, 0) for r in rs) for c in CAUSES}
+        out[key] = Result(**avg, idsw=sum(r.idsw for r in rs), frames=int(w.sum()), causes=causes)
     return out
 
 
 def table(title: str, res: dict[str, Result]) -> str:
+    res = pick_peers(res)
     lines = [f"### {title}", "",
              "| | MOTA | MOTP | IDF1 | IDSW | Table-6 precision (=recall) | Table-6 recall (=precision) "
              "| assoc ms/frame |", "|---|---|---|---|---|---|---|---|"]
@@ -219,6 +351,12 @@ def table(title: str, res: dict[str, Result]) -> str:
             lines.append(f"| {name} | {100 * r.mota:.2f}% | {100 * r.motp:.2f}% | {100 * r.idf1:.2f}% "
                          f"| {r.idsw} | {100 * r.recall:.2f}% | {100 * r.precision:.2f}% "
                          f"| {r.assoc_ms:.1f} |")
+    lines += ["", "False output boxes (motmetrics FP) by cause:", "",
+              "| | " + " | ".join(CAUSES) + " | all FP |", "|---|" + "---|" * (len(CAUSES) + 1)]
+    for name, r in res.items():
+        if name != "object detector":
+            lines.append(f"| {name} | " + " | ".join(str(r.causes.get(c, 0)) for c in CAUSES)
+                         + f" | {sum(r.causes.values())} |")
     return "\n".join(lines) + "\n"
 
 

@@ -183,3 +183,27 @@ def test_a_lasting_change_of_size_is_measured_in_full_after_partial_max_run() ->
     assert trk.tracks[0].partial_run == 5 and trk.tracks[0].box.w > 27
     _walk(trk, walk[17:], cut=3)
     assert trk.tracks[0].partial_run == 0 and trk.tracks[0].box.w < 22  # the narrow box is the target now
+
+
+def test_the_iou_gate_rejects_a_box_of_another_scale_inside_the_centre_gate() -> None:
+    trk = _tracker()
+    box = Box(100, 80, 30, 80)
+    trk.step(_frame_with([box]), [Detection(box)])
+    same, big = box.shifted(2, 0), Box.from_center(box.cx + 2, box.cy, 75, 200)  # same centre, 2.5x the size
+    dets = trk.describe(_frame_with([same]), [Detection(same), Detection(big)])
+    gated = cost_matrix(trk.tracks, dets, trk.weights)
+    assert gated[0, 0] < FORBIDDEN and gated[0, 1] == FORBIDDEN
+    loose = cost_matrix(trk.tracks, dets, CostWeights(min_iou=0.0, use_siamese=False))
+    assert loose[0, 1] < FORBIDDEN  # the Mahalanobis gate on the centre alone lets it through
+
+
+def test_a_partial_view_must_lie_inside_the_prediction() -> None:
+    trk = _tracker()
+    box = Box(100, 80, 30, 80)
+    for _ in range(3):
+        trk.step(_frame_with([box]), [Detection(box)])
+    upper_inside = Box(100, 80, 30, 40)  # top half of the predicted box: an occluder hides the legs
+    upper_offset = Box(112, 80, 30, 40)  # the same cut, but 40 % of it outside the prediction
+    dets = trk.describe(_frame_with([box]), [Detection(upper_inside), Detection(upper_offset)])
+    C = cost_matrix(trk.tracks, dets, trk.weights)
+    assert C[0, 0] < FORBIDDEN and C[0, 1] == FORBIDDEN

@@ -31,6 +31,33 @@ def test_motion_detector_finds_walkers_and_ignores_the_static_scene() -> None:
     assert all(static.detect(img) == [] for _ in range(15))
 
 
+def test_motion_detector_finds_most_pedestrians_on_tud_campus(shared_dir: Path) -> None:
+    # Static camera, people present from the first frame and walking in groups. Per frame, greedy one-to-one
+    # matching at IoU >= 0.5 against the ground truth (all 71 frames, warm-up included). The former running
+    # Gaussian background (ghosts of the people of frame 1, groups merged into one box) found 4 % at 6 %
+    # precision; the temporal median with person-width splitting measures 48 % at 52 %.
+    seq = shared_dir / "data" / "mot" / "tud_campus"
+    rows = np.loadtxt(seq / "gt.txt", delimiter=",", ndmin=2)
+    det = MotionDetector()
+    tp = n_det = n_gt = 0
+    for f in range(1, int(rows[:, 0].max()) + 1):
+        img = cv2.imread(str(seq / f"{f:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        gt = [Box(r[2] - 1.0, r[3] - 1.0, r[4], r[5]) for r in rows[rows[:, 0] == f]]
+        boxes = [d.box for d in det.detect(img)]
+        pairs = sorted(((b.iou(g), i, j) for i, b in enumerate(boxes) for j, g in enumerate(gt)),
+                       reverse=True)
+        used_b: set[int] = set()
+        used_g: set[int] = set()
+        for iou, i, j in pairs:
+            if iou >= 0.5 and i not in used_b and j not in used_g:
+                used_b.add(i)
+                used_g.add(j)
+        tp += len(used_b)
+        n_det += len(boxes)
+        n_gt += len(gt)
+    assert tp / n_gt > 0.4 and tp / n_det > 0.45, (tp / n_gt, tp / n_det)
+
+
 def _pan(img: np.ndarray, dx: float) -> np.ndarray:
     M = np.array([[1.0, 0.0, dx], [0.0, 1.0, 0.0]], np.float32)
     return cv2.warpAffine(img, M, (img.shape[1], img.shape[0]), borderMode=cv2.BORDER_REFLECT)

@@ -73,6 +73,15 @@ class CostWeights:
     partial_ratio: float = 0.75
     partial_one_sided: float = 0.5
     partial_max_run: int = 5
+    min_iou: float = 0.0  # a pair needs this IoU between the prediction and the (anchored) detection box
+    partial_inside: float = 0.0  # area fraction of a partial detection inside the prediction
+
+
+def inside_fraction(box: Box, outer: Box) -> float:
+    """Fraction of box's area inside outer (0 for a degenerate box)."""
+    ix = max(0.0, min(box.x + box.w, outer.x + outer.w) - max(box.x, outer.x))
+    iy = max(0.0, min(box.y + box.h, outer.y + outer.h) - max(box.y, outer.y))
+    return ix * iy / box.area if box.area > 0 else 0.0
 
 
 def pair_edges(t: TrackLike, box: Box, w: CostWeights) -> tuple[int, ...]:
@@ -112,10 +121,15 @@ def cost_matrix(tracks: Sequence[TrackLike], dets: Sequence[Detection], w: CostW
             a = d.appearance
             if a is None:
                 raise ValueError("detections must be described before association")
+            anchored = anchored_box(pred, d.box, edges[j])
+            if w.min_iou > 0.0 and pred.iou(anchored) < w.min_iou:
+                continue
+            if edges[j] != ALL_EDGES and inside_fraction(d.box, pred) < w.partial_inside:
+                continue
             c = base_appearance_cost(t.appearance, pred, a, d.box, d.score, w.base)
             if w.use_edge:
                 c += w.w3 * rms_distance(t.appearance.edge, a.edge)
-            c += motion_cost(pred, anchored_box(pred, d.box, edges[j]), t.history, w.w_dst, w.w_dev)
+            c += motion_cost(pred, anchored, t.history, w.w_dst, w.w_dev)
             C[i, j] = c
             if w.use_siamese:
                 g = siamese_distance(t.appearance, a, w.w1, w.w2)

@@ -50,6 +50,12 @@ class MotParams:
     use_siamese: bool = _f(True, "add the Siamese score gamma (needs the ONNX models)")
     gate_chi2: float = _f(9.21, "Mahalanobis gate on the centre, chi^2 with 2 dof (0.99)", 0.1, 1e4)
     max_cost: float = _f(1e6, "reject an assignment costing more than this", 0.0, 1e9)
+    min_iou: float = _f(0.3, "a track and a detection pair only when the predicted box and the "
+                        "detection (anchored at its visible edges) overlap at least this much (IoU; SORT's "
+                        "gate); 0 = the Mahalanobis gate alone (paper 004)", 0.0, 1.0)
+    high_score: float = _f(0.0, "two-stage assignment (ByteTrack): detections scoring below this only "
+                           "continue confirmed tracks left over by the stronger ones and never start a "
+                           "track; 0 = one stage", 0.0, 1.0)
     partial_ratio: float = _f(0.75, "a detection narrower or shorter than this fraction of the predicted "
                               "box, cut from one side and inside it, is partial (an occluder or the image "
                               "border hides the rest): gated and updated on its visible edges only, template "
@@ -57,16 +63,24 @@ class MotParams:
     partial_one_sided: float = _f(0.5, "a cut is one-sided when the detection's near edge moved at most this "
                                   "fraction of its far edge (else a change of scale, measured in full)",
                                   0.0, 1.0)
+    partial_inside: float = _f(0.9, "a partial detection pairs with a track only when at least this "
+                               "fraction of its area lies inside the predicted box: a part of the target is "
+                               "inside the target's box (the tenth left is the prediction's error); 0 = no "
+                               "such test", 0.0, 1.0)
     partial_max_run: int = _f(5, "after this many partial updates in a row a track is updated in full "
                               "again: a change of size that lasts is the target's (5 hits, as confirm_hits)",
                               1, 1000)
-    confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits", 0, 100)
+    confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits (paper 004: 5; "
+                            "SORT's min_hits: 3)", 0, 100)
     tentative_max_miss: int = _f(5, "a tentative track missed this many frames is deleted", 1, 100)
     history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
     drift_threshold: int = _f(15, "a drifting track missed this many more frames is deleted", 1, 1000)
-    display_max_miss: int = _f(2, "a confirmed track is output while missed at most this many frames (the "
-                               "paper shows it until it drifts, 20; coasting boxes are mostly false "
-                               "positives)", 0, 1000)
+    display_max_miss: int = _f(1, "a confirmed track is output while missed at most this many frames "
+                               "(the paper shows it until it drifts, 20, and those boxes are mostly false "
+                               "positives; SORT and ByteTrack only while matched, 0; 1 bridges one missed "
+                               "detection)", 0, 1000)
+    output_detection: bool = _f(False, "publish a matched track with the detection it was matched to "
+                                "(as SORT and ByteTrack do) instead of the filtered box")
     history_len: int = _f(10, "positions kept for the motion pattern", 2, 100)
     siamese_min_w: int = _f(19, "Siamese nets only for boxes at least this wide (px)", 1, 10000)
     siamese_min_h: int = _f(50, "Siamese nets only for boxes at least this tall (px)", 1, 10000)
@@ -88,7 +102,8 @@ class MotParams:
                            self.w_overlap)
         return CostWeights(base, self.w1, self.w2, self.w3, self.w_dst, self.w_dev, self.use_edge,
                            self.use_siamese, self.gate_chi2, self.max_cost, self.partial_ratio,
-                           self.partial_one_sided, self.partial_max_run)
+                           self.partial_one_sided, self.partial_max_run, self.min_iou,
+                           self.partial_inside)
 
 
 class TrackStatus(str, Enum):
@@ -114,6 +129,7 @@ class Track:
     matched: bool = True
     partial_run: int = 0  # consecutive partial updates (motion.visible_edges)
     last_box: Box = field(default_factory=lambda: Box(0, 0, 1, 1))
+    output_detection: bool = False  # MotParams.output_detection
 
     @property
     def predicted(self) -> Box:
@@ -121,6 +137,14 @@ class Track:
 
     @property
     def box(self) -> Box:
+        return box_from_state(self.x)
+
+    @property
+    def output_box(self) -> Box:
+        """The box published for this track: the detection it was matched to this frame when that detection
+        showed the whole target (as SORT and ByteTrack publish), else the filtered state."""
+        if self.matched and self.partial_run == 0 and self.output_detection:
+            return self.last_box
         return box_from_state(self.x)
 
     @property
@@ -190,8 +214,7 @@ class MultiTargetTracker:
             t.matched = False
             t.age += 1
         described = self.describe(gray, dets)
-        C = cost_matrix(self.tracks, described, self.weights)
-        matches, unmatched_tracks, unmatched_dets = assign(C, self.weights.max_cost)
+        matches, unmatched_tracks, unmatched_dets = self._associate(described)
         self.last_timing_s = time.perf_counter() - t0
         for i, j in matches:
             self._update(self.tracks[i], described[j])
@@ -203,6 +226,25 @@ class MultiTargetTracker:
         for t in self.tracks:
             t.history.append((float(t.x[0]), float(t.x[1])))
         return [t for t in self.tracks if t.displayed and t.misses <= p.display_max_miss]
+
+    def _associate(self, dets: Sequence[Detection]) -> tuple[list[tuple[int, int]], list[int], list[int]]:
+        """Two-stage assignment (ByteTrack, Zhang et al. ECCV 2022, Section 3): every track against the
+        detections scoring at least `high_score` first, then the confirmed tracks left over against the
+        weaker detections, with the same cost; a weak detection left over never starts a track (it is
+        returned as matched to nothing and not spawned). high_score 0 = one stage (paper 004)."""
+        p = self.params
+        hi = [j for j, d in enumerate(dets) if d.score >= p.high_score]
+        lo = [j for j, d in enumerate(dets) if d.score < p.high_score]
+        C = cost_matrix(self.tracks, [dets[j] for j in hi], self.weights)
+        m1, un_t, un_hi = assign(C, self.weights.max_cost)
+        matches = [(i, hi[j]) for i, j in m1]
+        rest = [i for i in un_t if self.tracks[i].status is not TrackStatus.TENTATIVE]
+        if lo and rest:
+            C2 = cost_matrix([self.tracks[i] for i in rest], [dets[j] for j in lo], self.weights)
+            m2, _, _ = assign(C2, self.weights.max_cost)
+            matches += [(rest[i], lo[j]) for i, j in m2]
+        matched = {i for i, _ in matches}
+        return matches, [i for i in range(len(self.tracks)) if i not in matched], [hi[j] for j in un_hi]
 
     def _update(self, t: Track, d: Detection) -> None:
         """Kalman update and template replacement (Section 3.1). A partial detection (`motion.visible_edges`)
@@ -252,5 +294,5 @@ class MultiTargetTracker:
         P0 = initial_covariance(d.box, p.r_pos_rel * d.box.h, p.r_size_rel * d.box.h, p.v0_rel * d.box.h)
         hist: deque = deque(maxlen=p.history_len)
         self.tracks.append(Track(self.next_id, state_from_box(d.box), P0, R, d.appearance, hist,
-                                 last_box=d.box))
+                                 last_box=d.box, output_detection=p.output_detection))
         self.next_id += 1

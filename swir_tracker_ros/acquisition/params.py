@@ -33,9 +33,11 @@ class AcquisitionParams:
     auto_handoff: bool = _f(False, "hand off a confirmed moving target by itself (tracker idle or lost)")
     candidates: int = _f(3, "tracks offered when the single-object tracker reports lost", 1, 50)
     publish_debug: bool = _f(True, "publish /acquisition/debug_image (only with subscribers)")
-    motion_learning_rate: float = _f(0.02, "background model update rate", 1e-4, 1.0)
-    motion_threshold_sigma: float = _f(3.0, "foreground above this many background std", 0.5, 20.0)
-    motion_min_area: float = _f(150.0, "smallest contour box kept (px^2)", 0.0, 1e7)
+    motion_history: int = _f(21, "frames in the temporal-median background buffer", 1, 201)
+    motion_sample_every: int = _f(2, "a frame enters the background buffer every this many frames", 1, 100)
+    motion_threshold: float = _f(14.0, "foreground above this difference to the background (8-bit levels)",
+                                 1.0, 255.0)
+    motion_min_area: float = _f(1000.0, "smallest foreground region kept (px)", 0.0, 1e7)
     motion_open_size: int = _f(3, "morphological opening kernel (px)", 1, 51)
     motion_close_size: int = _f(9, "morphological closing kernel (px)", 1, 101)
     hog_hit_threshold: float = _f(0.0, "HOG SVM hit threshold", -5.0, 5.0)
@@ -60,8 +62,8 @@ class AcquisitionParams:
         if self.detector == "hog":
             hog = HogParams(hit_threshold=self.hog_hit_threshold, upscale=self.hog_upscale)
             return HogPeopleDetector(hog)
-        return MotionDetector(MotionParams(learning_rate=self.motion_learning_rate,
-                                           threshold_sigma=self.motion_threshold_sigma,
+        return MotionDetector(MotionParams(history=self.motion_history, sample_every=self.motion_sample_every,
+                                           threshold=self.motion_threshold,
                                            min_area=self.motion_min_area, open_size=self.motion_open_size,
                                            close_size=self.motion_close_size))
 
