@@ -25,7 +25,8 @@ class DemoParams:
     duration_s: float = field(default=30.0, metadata={"doc": "seconds of scene recorded per run",
                                                       "min": 1.0, "max": 600.0})
     storage: str = field(default="mcap", metadata={"doc": "rosbag2 storage", "choices": ("mcap", "sqlite3")})
-    bag_images: bool = field(default=True, metadata={"doc": "record /camera/image_raw in the bag"})
+    bag_images: bool = field(default=False, metadata={
+        "doc": "record /camera/image_raw in the bag (~14 MB/s; the debug video carries the pictures)"})
     snapshots: list[float] = field(default_factory=lambda: [2.0, 8.0, 16.0, 24.0], metadata={
         "doc": "scene times (s) at which a debug frame is saved as PNG"})
     startup_timeout_s: float = field(default=60.0, metadata={
@@ -58,6 +59,13 @@ class DemoParams:
 
     def with_duration(self, seconds: float) -> DemoParams:
         return dataclasses.replace(self, duration_s=float(seconds)).validate()
+
+    def with_overrides(self, **values: object) -> DemoParams:
+        """A copy with the given fields replaced (None: keep the current value), validated."""
+        given = {k: v for k, v in values.items() if v is not None}
+        if "duration_s" in given:
+            given["duration_s"] = float(given["duration_s"])  # type: ignore[arg-type]
+        return dataclasses.replace(self, **given).validate()
 
 
 def params_dir() -> Path:
