@@ -77,8 +77,10 @@ class ProcessGroup:
     env: dict[str, str]
     started: list[Managed] = field(default_factory=list)
 
-    def start(self, name: str, argv: list[str], *, capture_first_line: bool = False) -> Managed:
-        """Start argv; with capture_first_line, stdout is a pipe so `first_line` can read it."""
+    def start(self, name: str, argv: list[str], *, capture_first_line: bool = False, nice: int = 0
+              ) -> Managed:
+        """Start argv; with capture_first_line, stdout is a pipe so `first_line` can read it; `nice` is
+        added to the process's niceness (lower CPU priority)."""
         self.log_dir.mkdir(parents=True, exist_ok=True)
         log = self.log_dir / f"{name}.log"
         log.write_bytes(b"")
@@ -87,6 +89,7 @@ class ProcessGroup:
         try:
             proc = subprocess.Popen(
                 argv, stdout=stdout, stderr=fh, env=self.env, start_new_session=True,
+                preexec_fn=(lambda: os.nice(nice)) if nice > 0 else None,
             )
         except OSError as exc:
             fh.close()

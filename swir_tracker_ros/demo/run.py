@@ -92,7 +92,8 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print, vid
                                                      {**p.positioner_overrides, "port": port})])
         group.start("scene_camera", [find_executable("scene_camera"), *_ros_args(
             pdir / "scene_camera.yaml", {**p.scene_camera_overrides, "autostart": False, "scene": p.scene,
-                                         "seed": p.seed, "duration_s": p.duration_s + 5.0})])
+                                         "seed": p.seed, "duration_s": p.duration_s + 5.0})],
+                    nice=p.sim_nice)
         group.start("tracker", [find_executable("tracker"), *_ros_args(
             pdir / "tracker.yaml", {**p.tracker_overrides, "ego_motion_compensation": ego})])
         supervisor = group.start("demo_supervisor", [
@@ -100,7 +101,7 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print, vid
             "--duration", str(p.duration_s), "--label", p.scene, "--ego", str(int(ego)),
             "--storage", p.storage, "--bag-images", str(int(p.bag_images)),
             "--startup-timeout", str(p.startup_timeout_s), "--video", str(int(video)),
-            "--snapshots", *([str(s) for s in p.snapshots] if video else [])])
+            "--snapshots", *([str(s) for s in p.snapshots] if video else [])], nice=p.sim_nice)
         deadline = time.monotonic() + p.startup_timeout_s + p.duration_s + 30.0
         while supervisor.proc.poll() is None:
             dead = [m for m in group.dead() if m is not supervisor]

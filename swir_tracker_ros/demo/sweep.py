@@ -10,7 +10,7 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from swir_tracker_ros.demo.analysis import RunSummary
@@ -41,6 +41,7 @@ class SweepRow:
     success: bool
     load_average: float  # 1-minute load average at the end of the run
     folder: str
+    cpu_s: dict = field(default_factory=dict)  # CPU seconds of each process of the run
 
 
 COLUMNS = (
@@ -54,7 +55,7 @@ COLUMNS = (
     ("occl. survived", lambda r: f"{r.summary['occlusions_survived']}/{r.summary['occlusions']}"),
     ("false-tracking frames", lambda r: str(r.summary["false_tracking_frames"])),
     ("lost frames", lambda r: str(r.summary["lost_frames"])),
-    ("tracker out/s", lambda r: f"{r.summary['tracker_fps']:.1f}"),
+    ("camera / tracker fps", lambda r: f"{r.summary['camera_fps']:.1f} / {r.summary['tracker_fps']:.1f}"),
     ("frames skipped", lambda r: f"{r.summary['frames_skipped']}/{r.summary['frames']}"),
     ("final state", lambda r: r.summary["final_state"]),
     ("load", lambda r: f"{r.load_average:.1f}"),
@@ -92,9 +93,11 @@ def text(rows: list[SweepRow]) -> str:
     return body + "\n" + "\n".join(success_lines(rows))
 
 
-def row_from(scene: str, seed: int, ego: bool, repeat: int, summary: RunSummary, folder: Path) -> SweepRow:
+def row_from(scene: str, seed: int, ego: bool, repeat: int, summary: RunSummary, folder: Path,
+             exits: dict | None = None) -> SweepRow:
+    cpu = {name: e.get("cpu_s") for name, e in (exits or {}).items()}
     return SweepRow(scene, seed, ego, repeat, summary.as_dict(), succeeded(summary), os.getloadavg()[0],
-                    str(folder))
+                    str(folder), cpu)
 
 
 class BackgroundLoad:
@@ -177,7 +180,7 @@ def main(argv: list[str] | None = None) -> int:
             folder = out / (f"{scene}_s{seed}" + (f"_r{k + 1}" if args.repeat > 1 else ""))
             try:
                 result = run_once(p, folder, ego, i, video=False)
-                summary = result.summary
+                summary, exits = result.summary, result.exits
             except DemoError as exc:
                 print(f"[sweep] {scene} seed {seed}: {exc}", file=sys.stderr)
                 rec_path = folder / ("ego_on" if ego else "ego_off") / "records.json"
@@ -186,9 +189,10 @@ def main(argv: list[str] | None = None) -> int:
                 from swir_tracker_ros.demo.recording import RunRecords
 
                 scene_built = build_scene(scene, seed)
+                exits = {}
                 summary = summarise(RunRecords.load(rec_path),
                                     lambda times, b=scene_built: target_visibility(b, list(times)))
-            rows.append(row_from(scene, seed, ego, k + 1, summary, folder))
+            rows.append(row_from(scene, seed, ego, k + 1, summary, folder, exits))
             r = rows[-1].summary
             print(f"[sweep] {i + 1}/{len(plan)} {scene} seed {seed}: in view {r['in_view_fraction']:.1%}, "
                   f"at end {r['in_view_at_end']}, false tracking {r['false_tracking_frames']}, "

@@ -99,6 +99,11 @@ class DemoSupervisor(Node):
         for topic, type_name in RECORDED_TOPICS.items():
             if topic == "/track/init":
                 continue  # recorded as published by this node
+            if topic == "/camera/image_raw" and self._skip_images:
+                # Not recorded: do not take a 0.6 MB reliable copy of every frame from the camera (its CPU
+                # is the tracker's on a small machine); the frame stamps come from /camera/camera_info,
+                # which the camera publishes with the same header for every image.
+                continue
             qos = IMAGE_QOS if type_name == "sensor_msgs/msg/Image" else RECORD_QOS
             self.create_subscription(TYPES[type_name], topic, self._make_cb(topic), qos, raw=True)
         if self.video is not None:
@@ -161,7 +166,9 @@ class DemoSupervisor(Node):
             pan, tilt, stamp = joint_state_to_pan_tilt(msg)
             self.rec.joints.append([stamp, now, pan, tilt])
             self.joints_seen = True
-        elif topic == "/camera/camera_info" and not self.rec.camera:
+        elif topic == "/camera/camera_info" and self._skip_images:
+            self.rec.frames.append([stamp_to_seconds(msg.header.stamp), now])
+        if topic == "/camera/camera_info" and not self.rec.camera:
             intr = intrinsics_from_camera_info(msg)
             self.rec.camera = {"width": intr.width, "height": intr.height, "fx": intr.fx, "fy": intr.fy,
                                "cx": intr.cx, "cy": intr.cy}
