@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
 import shutil
@@ -97,6 +98,8 @@ class ProcessGroup:
         finally:
             if not capture_first_line:
                 fh.close()
+        if nice > 0:
+            _nice_session(proc.pid, nice)
         managed = Managed(name, proc, log)
         self.started.append(managed)
         return managed
@@ -162,6 +165,17 @@ class ProcessGroup:
     def dead(self) -> list[Managed]:
         """Processes that ended by themselves while they should still be running."""
         return [m for m in self.started if m.how == "running" and m.proc.poll() is not None]
+
+
+def _nice_session(pid: int, nice: int) -> None:
+    """Lower the CPU weight of a process that leads its own session.
+
+    With the kernel's autogroup scheduling (/proc/sys/kernel/sched_autogroup_enabled), each session is
+    one scheduling group whose weight comes from the group's nice value, not the process's: the process
+    nice set by `os.nice` then only ranks it inside its own session. Best effort (no autogroup: no file).
+    """
+    with contextlib.suppress(OSError):
+        Path(f"/proc/{pid}/autogroup").write_text(str(nice))
 
 
 def _drain_to_log(managed: Managed) -> None:
