@@ -103,6 +103,17 @@ def test_false_tracking_and_skipped_frames_are_counted() -> None:
     assert sweep.markdown(rows).count("\n| demo |") == 2
 
 
+def test_init_is_answered_by_tracking_after_the_first_init() -> None:
+    """Init sent for the frame at 100.0 s, resent at 100.5 and 101.0 (the tracker had not answered yet):
+    a `tracking` state for the frame at 100.2 answers it (the old rule compared with the last resend and
+    waited on, while the head already followed the track)."""
+    from swir_tracker_ros.nodes.demo_supervisor_node import init_answered
+
+    assert init_answered(100.0, "tracking", 100.2)
+    assert not init_answered(100.0, "tracking", 99.96)  # a state from before the init
+    assert not init_answered(100.0, "idle", 100.2) and init_answered(100.0, "occluded", 100.2)
+
+
 def test_sweep_seeds_and_background_load() -> None:
     from swir_tracker_ros.demo import sweep
 
@@ -207,6 +218,14 @@ def test_shortened_demo_end_to_end(tmp_path) -> None:
     rec = json.loads((out / "ego_on" / "records.json").read_text())
     moving = [t - rec["scene_start"] for t, _recv, pan, _ in rec["joints"] if abs(pan) > math.radians(0.1)]
     assert moving and moving[0] < 1.0, moving[:3]
+    # The scene starts with the tracker's first `tracking` answer to /track/init, not seconds later: the
+    # head follows the track from that answer on, and turned 2.3 deg past the paused target on a loaded
+    # machine while the supervisor chased its own resent inits' stamps.
+    first = next(recv for stamp, recv, state in rec["state"]
+                 if state == "tracking" and stamp >= rec["init_time"])
+    assert rec["scene_start"] - first < 1.0, (first, rec["scene_start"])
+    before = [abs(pan) for t, _recv, pan, _ in rec["joints"] if t <= rec["scene_start"]]
+    assert max(before, default=0.0) < math.radians(0.5), max(before)
     exits = data["processes"]["ego_on"]
     assert set(exits) == {"pelco_sim", "positioner_bridge", "scene_camera", "tracker", "demo_supervisor"}
     for name, end in exits.items():

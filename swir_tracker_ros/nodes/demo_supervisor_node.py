@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -64,6 +65,17 @@ def debug_frame(msg: Image):
 
     frame, _bits = image_to_numpy(msg)
     return frame
+
+
+def init_answered(first_init_stamp: float, state: str, state_stamp: float) -> bool:
+    """The tracker has taken /track/init: it reports an active state for a frame at or after the frame of
+    the FIRST init sent (resends carry the same target on later frames).
+
+    Comparing with the latest resend instead made the supervisor chase the tracker's replies, which are
+    stamped a few frames back, for seconds on a loaded machine, while the head, already following the
+    track, turned towards the paused target and past it (2.3 deg in one run).
+    """
+    return state in ("tracking", "occluded") and state_stamp >= first_init_stamp
 
 
 class DemoSupervisor(Node):
@@ -237,8 +249,7 @@ class DemoSupervisor(Node):
                            f"{self.start_client.service_is_ready()}, inputs without a discovered publisher "
                            f"{missing or 'none'}")
         elif self.phase == "init":
-            tracking = self.latest_state in ("tracking", "occluded")
-            if tracking and self.latest_state_stamp >= self.rec.init_time:
+            if init_answered(self.rec.init_time, self.latest_state, self.latest_state_stamp):
                 self.start_future = self.start_client.call_async(Trigger.Request())
                 self._set_phase("start")
             elif waited > self.args.init_timeout:
@@ -270,7 +281,8 @@ class DemoSupervisor(Node):
             from rclpy.serialization import serialize_message
 
             self.bag.write("/track/init", int(now * 1e9), serialize_message(roi))
-        self.rec.init_time = self.latest_gt_stamp
+        if math.isnan(self.rec.init_time):  # the first init's frame (see `init_answered`)
+            self.rec.init_time = self.latest_gt_stamp
         self.rec.init_box = [float(roi.x_offset), float(roi.y_offset), float(roi.width), float(roi.height)]
         self.last_init_pub = now
         self.get_logger().info(f"/track/init {self.rec.init_box} from ground truth")
