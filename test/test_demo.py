@@ -281,3 +281,48 @@ def test_video_sink_writes_mp4_or_falls_back_to_gif(tmp_path, monkeypatch) -> No
     assert path is not None and path.suffix == ".gif"
     with Image.open(path) as gif:
         assert gif.n_frames == 5 and gif.size == (288, 252)
+
+
+def test_tracker_node_passes_elapsed_frames_once_the_core_takes_them(monkeypatch) -> None:
+    """The closed loop's frame skipping reaches the core: with a core whose update() accepts `frames`,
+    the node passes 1 + the frames skipped since the last processed stamp (core contract item 3)."""
+    import numpy as np
+    import rclpy
+    from rclpy.context import Context
+
+    from msg_adapters.image import numpy_to_image
+    from msg_adapters.stamps import header
+    from swir_tracker_ros.nodes import tracker_node
+    from swir_tracker_ros.types import Box, TrackResult, TrackState
+
+    calls: list[dict] = []
+
+    class Core:
+        state = TrackState.TRACKING
+
+        def __init__(self, _params=None) -> None:
+            pass
+
+        def init(self, *_a, **_k) -> None:
+            pass
+
+        def update(self, frame, ego_shift=(0.0, 0.0), bit_depth=None, frames=1.0) -> TrackResult:
+            calls.append({"frames": frames})
+            return TrackResult(box=Box(10.0, 10.0, 8.0, 8.0), state=TrackState.TRACKING, measured=True)
+
+    monkeypatch.setattr(tracker_node, "Tracker", Core)
+    monkeypatch.setattr(tracker_node, "_UPDATE_TAKES_FRAMES", True)
+    ctx = Context()
+    rclpy.init(context=ctx)
+    try:
+        node = tracker_node.TrackerNode(context=ctx, parameter_overrides=[
+            rclpy.parameter.Parameter("init_box", value=[10.0, 10.0, 8.0, 8.0]),
+            rclpy.parameter.Parameter("max_frame_age_s", value=0.0)])
+        pixels = np.full((48, 64), 1000, np.uint16)
+        stamps = [1.0 + k * 0.04 for k in range(8)] + [1.40, 1.44, 1.64]  # 1.28 -> skips 2, 0, 4
+        for t in stamps:
+            node._on_image(numpy_to_image(pixels, header(t, "cam")))
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+    assert [c["frames"] for c in calls[-3:]] == [3.0, 1.0, 5.0], calls
