@@ -14,7 +14,7 @@ PIP_FLAGS ?= --disable-pip-version-check -q
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PYTHONDONTWRITEBYTECODE = 1
 
-.PHONY: venv test lint demo bench bench-venv mot-venv train-venv regress train clean
+.PHONY: venv test lint demo demo-sweep bench bench-venv mot-venv train-venv regress train clean
 
 venv: $(STAMP)
 
@@ -66,6 +66,11 @@ regress: $(STAMP)
 
 demo: $(STAMP)
 	$(VENV)/bin/demo --out out/demo
+
+# SWEEP_ARGS, e.g. "--scenes all --seeds 3" or "--load" (docs/demo.md).
+SWEEP_ARGS ?= --scenes demo --seeds 10
+demo-sweep: $(STAMP)
+	$(VENV)/bin/demo sweep --out out/sweep $(SWEEP_ARGS)
 
 bench: $(STAMP) $(BSTAMP)
 	$(VPY) benchmarks/core_speed.py

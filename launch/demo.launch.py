@@ -76,7 +76,9 @@ def generate_launch_description() -> LaunchDescription:
         DeclareLaunchArgument("max_accel", default_value="0.05",
                               description="head slew-rate limit, rad/s^2 (gentle starts keep ego-motion "
                               "compensation ahead of the image motion; docs/demo.md)"),
-        DeclareLaunchArgument("scene", default_value="demo", description="scene rendered by scene_camera"),
+        DeclareLaunchArgument("scene", default_value="demo", description=(
+            "scene rendered by scene_camera: demo, a harder variant (demo_crossing, demo_long_occlusion, "
+            "demo_fast, demo_low_contrast, demo_shake) or a harness scenario")),
         DeclareLaunchArgument("seed", default_value="7", description="scene seed"),
         DeclareLaunchArgument("init_from_scene", default_value="true",
                               description="start tracking the scene's pedestrian on the first frame"),

@@ -81,6 +81,51 @@ def test_episodes_from_scene_visibility_cover_a_target_out_of_view() -> None:
     assert s.occlusions == 2 and s.occlusions_survived == 1
 
 
+def test_false_tracking_and_skipped_frames_are_counted() -> None:
+    """`tracking` on a box that does not overlap the target is false tracking; frames with no output
+    are skipped; both decide a sweep run's success."""
+    from swir_tracker_ros.demo import sweep
+
+    rec = synthetic_records()
+    assert summarise(rec).false_tracking_frames == 0
+    for row in rec.track[100:110]:
+        row[2] = [row[2][0] + 200.0, *row[2][1:]]  # on the background, 200 px away, while `tracking`
+    for row in rec.track[120:125]:
+        row[2] = [row[2][0] + 20.0, *row[2][1:]]  # off-centre but overlapping: not false
+    del rec.state[130:133], rec.track[130:133]
+    s = summarise(rec)
+    assert s.false_tracking_frames == 10 and s.frames_skipped == 3
+    assert not sweep.succeeded(s) and sweep.succeeded(summarise(synthetic_records()))
+    rows = [sweep.row_from("demo", 3, True, 1, s, REPO),
+            sweep.row_from("demo", 4, True, 1, summarise(synthetic_records()), REPO)]
+    table = sweep.text(rows)
+    assert "false-tracking frames" in table and "3/150" in table and "demo: 1 of 2 runs succeeded" in table
+    assert sweep.markdown(rows).count("\n| demo |") == 2
+
+
+def test_init_is_answered_by_tracking_after_the_first_init() -> None:
+    """Init sent for the frame at 100.0 s, resent at 100.5 and 101.0 (the tracker had not answered yet):
+    a `tracking` state for the frame at 100.2 answers it (the old rule compared with the last resend and
+    waited on, while the head already followed the track)."""
+    from swir_tracker_ros.nodes.demo_supervisor_node import init_answered
+
+    assert init_answered(100.0, "tracking", 100.2)
+    assert not init_answered(100.0, "tracking", 99.96)  # a state from before the init
+    assert not init_answered(100.0, "idle", 100.2) and init_answered(100.0, "occluded", 100.2)
+
+
+def test_sweep_seeds_and_background_load() -> None:
+    from swir_tracker_ros.demo import sweep
+
+    assert sweep.parse_seeds("3") == [1, 2, 3] and sweep.parse_seeds("7,11") == [7, 11]
+    with pytest.raises(DemoError):
+        sweep.parse_seeds("x")
+    with sweep.BackgroundLoad(2) as load:
+        procs = list(load.procs)
+        assert len(procs) == 2 and all(p.poll() is None for p in procs)
+    assert all(p.poll() is not None for p in procs)
+
+
 def test_target_out_of_view_counts_against_time_in_view() -> None:
     rec = synthetic_records()
     for row in rec.truth[-50:]:
@@ -94,11 +139,16 @@ def test_reports_and_plots_are_written(tmp_path) -> None:
     runs = [(r, summarise(r)) for r in (synthetic_records(True), synthetic_records(False, recover=False))]
     plots = make_plots(tmp_path, runs, [tmp_path / "missing.csv"] * 2)
     assert all(p.stat().st_size > 10_000 for p in plots)
-    paths = write_reports(tmp_path, [s for _, s in runs], {"files": {"plot": "plots/centring_error.png"}})
+    from swir_tracker_ros.demo import sweep
+
+    rows = [sweep.row_from("demo", 7, r.ego_motion_compensation, 1, s, tmp_path) for r, s in runs]
+    paths = write_reports(tmp_path, [s for _, s in runs], {"files": {"plot": "plots/centring_error.png"},
+                                                           "sweep_markdown": sweep.markdown(rows)})
     data = json.loads(paths["json"].read_text())
     assert [r["ego_motion_compensation"] for r in data["runs"]] == [True, False]
     assert "occlusions survived" in paths["md"].read_text()
-    assert "<table>" in paths["html"].read_text()
+    assert "<table>" in paths["html"].read_text() and "Sweep-style summary" in paths["html"].read_text()
+    assert "demo: 2 of 2 runs succeeded" in paths["md"].read_text()  # lost, but in view throughout
     table = text_table([s for _, s in runs])
     assert "ego-motion compensation ON" in table and "ego-motion compensation OFF" in table
 
@@ -106,6 +156,10 @@ def test_reports_and_plots_are_written(tmp_path) -> None:
 def test_demo_params_file_and_validation(tmp_path) -> None:
     p = load_demo_params()  # params/demo.yaml
     assert p.scene == "demo" and p.duration_s > 0
+    assert not p.bag_images  # a newcomer's `make demo` stays small: the video carries the pictures
+    assert p.with_overrides(scene="demo_fast", seed=3, duration_s=None).seed == 3
+    with pytest.raises(DemoError, match="scene"):
+        p.with_overrides(scene="nowhere")
     assert p.with_duration(3.0).duration_s == 3.0
     bad = tmp_path / "demo.yaml"
     bad.write_text("demo:\n  scene: nowhere\n")
@@ -144,7 +198,8 @@ def test_launch_file_compiles_and_references_real_executables_and_params() -> No
 def test_shortened_demo_end_to_end(tmp_path) -> None:
     """A few seconds of the real graph: the head turns towards the pedestrian, who is in view at the end."""
     out = tmp_path / "demo"
-    proc = subprocess.run([executable("demo"), "--out", str(out), "--duration", "4", "--no-ego-compare"],
+    proc = subprocess.run([executable("demo"), "--out", str(out), "--duration", "4", "--no-ego-compare",
+                           "--bag-images"],
                           capture_output=True, text=True, timeout=150)
     logs = "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-1500:]}"
                      for p in sorted(out.glob("*/logs/*.log")))
@@ -163,6 +218,14 @@ def test_shortened_demo_end_to_end(tmp_path) -> None:
     rec = json.loads((out / "ego_on" / "records.json").read_text())
     moving = [t - rec["scene_start"] for t, _recv, pan, _ in rec["joints"] if abs(pan) > math.radians(0.1)]
     assert moving and moving[0] < 1.0, moving[:3]
+    # The scene starts with the tracker's first `tracking` answer to /track/init, not seconds later: the
+    # head follows the track from that answer on, and turned 2.3 deg past the paused target on a loaded
+    # machine while the supervisor chased its own resent inits' stamps.
+    first = next(recv for stamp, recv, state in rec["state"]
+                 if state == "tracking" and stamp >= rec["init_time"])
+    assert rec["scene_start"] - first < 1.0, (first, rec["scene_start"])
+    before = [abs(pan) for t, _recv, pan, _ in rec["joints"] if t <= rec["scene_start"]]
+    assert max(before, default=0.0) < math.radians(0.5), max(before)
     exits = data["processes"]["ego_on"]
     assert set(exits) == {"pelco_sim", "positioner_bridge", "scene_camera", "tracker", "demo_supervisor"}
     for name, end in exits.items():
@@ -181,7 +244,10 @@ def test_shortened_demo_end_to_end(tmp_path) -> None:
 def test_demo_module_runs_as_script_help() -> None:
     proc = subprocess.run([sys.executable, "-m", "swir_tracker_ros.demo.run", "--help"], capture_output=True,
                           text=True, timeout=60)
-    assert proc.returncode == 0 and "--no-ego-compare" in proc.stdout
+    assert proc.returncode == 0 and "--no-ego-compare" in proc.stdout and "--scene" in proc.stdout
+    proc = subprocess.run([sys.executable, "-m", "swir_tracker_ros.demo.run", "sweep", "--help"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and "--load" in proc.stdout and "--seeds" in proc.stdout
 
 
 def test_video_sink_writes_mp4_or_falls_back_to_gif(tmp_path, monkeypatch) -> None:
@@ -215,3 +281,48 @@ def test_video_sink_writes_mp4_or_falls_back_to_gif(tmp_path, monkeypatch) -> No
     assert path is not None and path.suffix == ".gif"
     with Image.open(path) as gif:
         assert gif.n_frames == 5 and gif.size == (288, 252)
+
+
+def test_tracker_node_passes_elapsed_frames_once_the_core_takes_them(monkeypatch) -> None:
+    """The closed loop's frame skipping reaches the core: with a core whose update() accepts `frames`,
+    the node passes 1 + the frames skipped since the last processed stamp (core contract item 3)."""
+    import numpy as np
+    import rclpy
+    from rclpy.context import Context
+
+    from msg_adapters.image import numpy_to_image
+    from msg_adapters.stamps import header
+    from swir_tracker_ros.nodes import tracker_node
+    from swir_tracker_ros.types import Box, TrackResult, TrackState
+
+    calls: list[dict] = []
+
+    class Core:
+        state = TrackState.TRACKING
+
+        def __init__(self, _params=None) -> None:
+            pass
+
+        def init(self, *_a, **_k) -> None:
+            pass
+
+        def update(self, frame, ego_shift=(0.0, 0.0), bit_depth=None, frames=1.0) -> TrackResult:
+            calls.append({"frames": frames})
+            return TrackResult(box=Box(10.0, 10.0, 8.0, 8.0), state=TrackState.TRACKING, measured=True)
+
+    monkeypatch.setattr(tracker_node, "Tracker", Core)
+    monkeypatch.setattr(tracker_node, "_UPDATE_TAKES_FRAMES", True)
+    ctx = Context()
+    rclpy.init(context=ctx)
+    try:
+        node = tracker_node.TrackerNode(context=ctx, parameter_overrides=[
+            rclpy.parameter.Parameter("init_box", value=[10.0, 10.0, 8.0, 8.0]),
+            rclpy.parameter.Parameter("max_frame_age_s", value=0.0)])
+        pixels = np.full((48, 64), 1000, np.uint16)
+        stamps = [1.0 + k * 0.04 for k in range(8)] + [1.40, 1.44, 1.64]  # 1.28 -> skips 2, 0, 4
+        for t in stamps:
+            node._on_image(numpy_to_image(pixels, header(t, "cam")))
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+    assert [c["frames"] for c in calls[-3:]] == [3.0, 1.0, 5.0], calls

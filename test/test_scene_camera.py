@@ -14,6 +14,7 @@ from conftest import wait_for
 from swir_tracker_ros.demo.world import (
     DEMO_DURATION_S,
     TARGET_ID,
+    VARIANTS,
     SceneClock,
     build_scene,
     initial_target_box,
@@ -62,6 +63,56 @@ def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> 
     assert vis[0] > 0.9 and vis[1] < 0.05 and vis[2] > 0.9
 
 
+def _hidden_runs(scene, step: float = 0.1) -> list[tuple[float, float]]:
+    """Scene-time runs (start, end) with less than half of the target visible."""
+    from swir_tracker_ros.demo.world import target_visibility
+
+    ts = np.arange(0.0, DEMO_DURATION_S, step)
+    runs: list[list[float]] = []
+    for t, v in zip(ts, target_visibility(scene, list(ts))):
+        if v < 0.5:
+            if runs and t - runs[-1][1] < 1.5 * step:
+                runs[-1][1] = float(t)
+            else:
+                runs.append([float(t), float(t)])
+    return [(a, b) for a, b in runs]
+
+
+def test_scene_family_variants_are_harder_as_documented(demo_scene) -> None:
+    """Each variant changes one thing against the demo scene, and the same seed gives the same frame."""
+    base_runs = _hidden_runs(demo_scene)
+    crossing = build_scene("demo_crossing", 7)
+    assert any(4.5 < a < 5.5 for a, _b in _hidden_runs(crossing))  # the crosser covers the target at ~5 s
+    assert not any(4.5 < a < 5.5 for a, _b in base_runs)
+    crosser = crossing.world.actor(4)
+    assert crosser.kind == "pedestrian" and crosser.look.upper < 0.25  # dark clothes, like the target
+    long_runs = _hidden_runs(build_scene("demo_long_occlusion", 7))
+    longest = max(b - a for a, b in long_runs)
+    assert longest > 2.5 > max(b - a for a, b in base_runs) + 0.5
+    long_scene = build_scene("demo_long_occlusion", 7)
+    a, b = max(long_runs, key=lambda r: r[1] - r[0])
+    path = long_scene.world.actor(TARGET_ID).path
+    assert any(path.velocity(t)[1] > 0.5 for t in np.arange(a, b, 0.1))  # it turns away while hidden
+    fast = build_scene("demo_fast", 7).world.actor(TARGET_ID).path
+    slow = demo_scene.world.actor(TARGET_ID).path
+    assert math.hypot(*fast.velocity(1.0)) == pytest.approx(1.6 * math.hypot(*slow.velocity(1.0)))
+    view = CameraView(math.radians(2.4), math.radians(-0.9), 8.0, 576, 504)
+    plain, _ = demo_scene.world.render(0.0, view)
+    washed, _ = build_scene("demo_low_contrast", 7).world.render(0.0, view)
+    assert np.std(washed.astype(float)) < 0.75 * np.std(plain.astype(float))
+    shake = build_scene("demo_shake", 7)
+    boxes = [target_truth(shake, t, view).box.x - target_truth(demo_scene, t, view).box.x
+             for t in (0.0, 0.1, 0.2, 0.3)]
+    assert max(map(abs, boxes)) > 0.5 and len({round(x, 2) for x in boxes}) > 1
+    again, _ = build_scene("demo_shake", 7).world.render(0.3, view)
+    first, _ = shake.world.render(0.3, view)
+    assert np.array_equal(again, first)
+    with pytest.raises(ValueError, match="unknown"):
+        from swir_tracker_ros.demo.world import demo_world
+
+        demo_world(7, variant="nope")
+
+
 def test_scene_clock_holds_until_started_and_at_the_end() -> None:
     clock = SceneClock(10.0)
     assert clock.time(100.0) == 0.0 and not clock.running
@@ -75,8 +126,8 @@ def test_scene_clock_holds_until_started_and_at_the_end() -> None:
 
 def test_build_scene_accepts_harness_scenarios_and_refuses_unknown_names() -> None:
     names = scene_names()
-    assert names[0] == "demo" and len(names) > 5
-    other = build_scene(names[1], seed=1, bits=12, fps=25.0)
+    assert names[0] == "demo" and set(VARIANTS) < set(names) and len(names) > len(VARIANTS) + 5
+    other = build_scene(next(n for n in names if n not in VARIANTS), seed=1, bits=12, fps=25.0)
     assert other.duration_s > 0 and other.world.sensor.bits == 12
     with pytest.raises(ValueError, match="unknown scene"):
         build_scene("no_such_scene", seed=0)

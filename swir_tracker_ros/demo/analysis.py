@@ -70,6 +70,8 @@ class RunSummary:
     latency_p95_ms: float
     lost_frames: int
     final_state: str
+    false_tracking_frames: int = 0  # state `tracking` while the box does not overlap the true target
+    frames_skipped: int = 0  # camera frames of the run the tracker produced no output for
     initial_offset_deg: list[float] = field(default_factory=list)  # target pan/tilt from the axis at start
     head_travel_deg: list[float] = field(default_factory=list)  # pan/tilt turned between start and end
     # Largest pan/tilt turn towards the target's initial direction (positive: the head went that way).
@@ -119,6 +121,21 @@ def _on_target(gt: list | None, track: list | None) -> bool:
         return False
     d = math.hypot(gt[0] + gt[2] / 2 - track[0] - track[2] / 2, gt[1] + gt[3] / 2 - track[1] - track[3] / 2)
     return d <= max(ON_TARGET_PX, 0.5 * gt[2])
+
+
+def _overlaps(gt: list | None, track: list | None) -> bool:
+    """The two [x, y, w, h] boxes share a positive area (False when either is missing)."""
+    if gt is None or track is None:
+        return False
+    ix = min(gt[0] + gt[2], track[0] + track[2]) - max(gt[0], track[0])
+    iy = min(gt[1] + gt[3], track[1] + track[3]) - max(gt[1], track[1])
+    return ix > 0.0 and iy > 0.0
+
+
+def false_tracking_frames(s: Series) -> int:
+    """Frames the tracker called `tracking` while its box did not overlap the target's true box at all
+    (the target out of the image counts as no overlap): the head is then steered by something else."""
+    return sum(st == "tracking" and not _overlaps(g, tr) for st, g, tr in zip(s.state, s.gt, s.track))
 
 
 def occlusion_episodes(s: Series, visibility: np.ndarray | None = None) -> list[Episode]:
@@ -208,6 +225,8 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
         tracker_fps=(len(outputs) - 1) / span if outputs else 0.0,
         latency_p50_ms=_stat(latency, 50), latency_p95_ms=_stat(latency, 95),
         lost_frames=sum(st == "lost" for st in s.state),
+        false_tracking_frames=false_tracking_frames(s),
+        frames_skipped=sum(st == "" for st in s.state),
         final_state=next((r[2] for r in reversed(rec.state) if r[0] <= t1 + 1e-6), ""),
         initial_offset_deg=[math.degrees(s.pan_error[0]), math.degrees(s.tilt_error[0])] if n else [],
         head_travel_deg=travel, head_turn_towards_deg=towards, episodes=[asdict(e) for e in episodes],

@@ -25,12 +25,19 @@ class DemoParams:
     duration_s: float = field(default=30.0, metadata={"doc": "seconds of scene recorded per run",
                                                       "min": 1.0, "max": 600.0})
     storage: str = field(default="mcap", metadata={"doc": "rosbag2 storage", "choices": ("mcap", "sqlite3")})
-    bag_images: bool = field(default=True, metadata={"doc": "record /camera/image_raw in the bag"})
+    bag_images: bool = field(default=False, metadata={
+        "doc": "record /camera/image_raw in the bag (~14 MB/s; the debug video carries the pictures)"})
     snapshots: list[float] = field(default_factory=lambda: [2.0, 8.0, 16.0, 24.0], metadata={
         "doc": "scene times (s) at which a debug frame is saved as PNG"})
     startup_timeout_s: float = field(default=60.0, metadata={
         "doc": "how long the processes may take to come up before the run is abandoned", "min": 5.0,
         "max": 600.0})
+    sim_nice: int = field(default=0, metadata={
+        "doc": "niceness added to the simulation-only processes (scene_camera's renderer and the recording "
+               "demo_supervisor), process and session (autogroup); 0: none. A lower weight lets the tracker "
+               "have the CPU first, but on a loaded machine the simulated camera then misses its 25 Hz "
+               "(16-22 frames/s measured, 3-5 during a start-up), which a real camera never does",
+        "min": 0, "max": 19})
     pelco_sim_args: list[str] = field(default_factory=list, metadata={
         "doc": "extra pelco_sim command-line arguments (speed table, latency, faults)"})
     positioner_overrides: dict[str, object] = field(default_factory=dict, metadata={
@@ -58,6 +65,13 @@ class DemoParams:
 
     def with_duration(self, seconds: float) -> DemoParams:
         return dataclasses.replace(self, duration_s=float(seconds)).validate()
+
+    def with_overrides(self, **values: object) -> DemoParams:
+        """A copy with the given fields replaced (None: keep the current value), validated."""
+        given = {k: v for k, v in values.items() if v is not None}
+        if "duration_s" in given:
+            given["duration_s"] = float(given["duration_s"])  # type: ignore[arg-type]
+        return dataclasses.replace(self, **given).validate()
 
 
 def params_dir() -> Path:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
 import shutil
@@ -77,8 +78,10 @@ class ProcessGroup:
     env: dict[str, str]
     started: list[Managed] = field(default_factory=list)
 
-    def start(self, name: str, argv: list[str], *, capture_first_line: bool = False) -> Managed:
-        """Start argv; with capture_first_line, stdout is a pipe so `first_line` can read it."""
+    def start(self, name: str, argv: list[str], *, capture_first_line: bool = False, nice: int = 0
+              ) -> Managed:
+        """Start argv; with capture_first_line, stdout is a pipe so `first_line` can read it; `nice` is
+        added to the process's niceness (lower CPU priority)."""
         self.log_dir.mkdir(parents=True, exist_ok=True)
         log = self.log_dir / f"{name}.log"
         log.write_bytes(b"")
@@ -87,6 +90,7 @@ class ProcessGroup:
         try:
             proc = subprocess.Popen(
                 argv, stdout=stdout, stderr=fh, env=self.env, start_new_session=True,
+                preexec_fn=(lambda: os.nice(nice)) if nice > 0 else None,
             )
         except OSError as exc:
             fh.close()
@@ -94,6 +98,8 @@ class ProcessGroup:
         finally:
             if not capture_first_line:
                 fh.close()
+        if nice > 0:
+            _nice_session(proc.pid, nice)
         managed = Managed(name, proc, log)
         self.started.append(managed)
         return managed
@@ -159,6 +165,17 @@ class ProcessGroup:
     def dead(self) -> list[Managed]:
         """Processes that ended by themselves while they should still be running."""
         return [m for m in self.started if m.how == "running" and m.proc.poll() is not None]
+
+
+def _nice_session(pid: int, nice: int) -> None:
+    """Lower the CPU weight of a process that leads its own session.
+
+    With the kernel's autogroup scheduling (/proc/sys/kernel/sched_autogroup_enabled), each session is
+    one scheduling group whose weight comes from the group's nice value, not the process's: the process
+    nice set by `os.nice` then only ranks it inside its own session. Best effort (no autogroup: no file).
+    """
+    with contextlib.suppress(OSError):
+        Path(f"/proc/{pid}/autogroup").write_text(str(nice))
 
 
 def _drain_to_log(managed: Managed) -> None:

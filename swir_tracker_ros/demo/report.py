@@ -158,7 +158,8 @@ def _machine_line(machine: dict) -> str:
 
 def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[str, Path]:
     """summary.json, report.md and report.html in `out`; extras: paths (relative) and process exits."""
-    data = {"runs": [s.as_dict() for s in summaries], **extras}
+    data = {"runs": [s.as_dict() for s in summaries],
+            **{k: v for k, v in extras.items() if k != "sweep_markdown"}}
     (out / "summary.json").write_text(json.dumps(data, indent=2, default=str))
     rows = summary_table(summaries)
     md = ["# Closed-loop pan-tilt demo", "",
@@ -168,6 +169,9 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
           _machine_line(extras.get("machine", {})), "",
           "| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     md += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    if extras.get("sweep_markdown"):
+        md += ["", "## Sweep-style summary (`demo sweep` columns; success: in view at the end and >= 95 % "
+               "of the time, no false-tracking frame)", "", extras["sweep_markdown"]]
     md += ["", "## Files", ""]
     for name, rel in extras.get("files", {}).items():
         md.append(f"- {name}: [{rel}]({rel})")
@@ -189,6 +193,15 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
 
     table = "".join("<tr>" + "".join(cell("th" if i == 0 else "td", c) for c in r) + "</tr>"
                     for i, r in enumerate(rows))
+    sweep_html = ""
+    if extras.get("sweep_markdown"):
+        lines = extras["sweep_markdown"].splitlines()
+        cells = [[c.strip() for c in ln.strip("|").split("|")] for ln in lines if ln.startswith("|")]
+        cells = [c for c in cells if not all(set(x) <= {"-"} for x in c)]
+        sweep_html = ("<h2>Sweep-style summary</h2><table>" + "".join(
+            "<tr>" + "".join(cell("th" if i == 0 else "td", c) for c in r) + "</tr>"
+            for i, r in enumerate(cells)) + "</table>" + "".join(
+            cell("p", ln[2:]) for ln in lines if ln.startswith("- ")))
     files = extras.get("files", {})
     videos = "".join(f"<h3>{html.escape(n)}</h3><video src='{html.escape(p)}' controls width='576'></video>"
                      f"<p><a href='{html.escape(p)}'>{html.escape(p)}</a></p>"
@@ -200,7 +213,7 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
         "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}td,th{padding:2px 10px;"
         "border-bottom:1px solid #ddd;text-align:left}</style></head><body>"
         "<h1>Closed-loop pan-tilt demo</h1>"
-        f"<p>{html.escape(md[2])}</p><p>{html.escape(md[4])}</p><table>{table}</table>"
+        f"<p>{html.escape(md[2])}</p><p>{html.escape(md[4])}</p><table>{table}</table>{sweep_html}"
         "<h2>Plots</h2><img src='plots/centring_error.png'><img src='plots/head_angles.png'>"
         f"<h2>Debug video</h2>{videos}{gifs}"
         "<p>MP4 uses the MPEG-4 Part 2 codec: if the browser does not play it, open the file with a video "

@@ -17,7 +17,7 @@ from swir_tracker_ros.demo.config import DemoParams, dds_profile, load_demo_para
 from swir_tracker_ros.demo.processes import DemoError, ProcessGroup, find_executable, ros_environment, tail
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
-from swir_tracker_ros.demo.world import build_scene, target_visibility
+from swir_tracker_ros.demo.world import VARIANTS, build_scene, target_visibility
 
 RUN_DIRS = {True: "ego_on", False: "ego_off"}
 
@@ -62,8 +62,12 @@ def _ros_args(params_file: Path | None, overrides: dict[str, object]) -> list[st
     return args
 
 
-def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> RunResult:
-    """Start the graph, let the supervisor initialise, start and record the scene, stop everything."""
+def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print, video: bool = True
+             ) -> RunResult:
+    """Start the graph, let the supervisor initialise, start and record the scene, stop everything.
+
+    video=False (the sweep): no debug video or stills, so the tracker renders no debug images either.
+    """
     folder = out / RUN_DIRS[ego]
     if folder.exists():
         shutil.rmtree(folder)
@@ -75,7 +79,8 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
         env.setdefault("FASTRTPS_DEFAULT_PROFILES_FILE", str(profile))
     group = ProcessGroup(folder / "logs", env)
     tag = f"ego-motion compensation {'ON' if ego else 'OFF'}"
-    log(f"[demo] run {run_index + 1}: {tag}, ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}, folder {folder}")
+    log(f"[demo] run {run_index + 1}: scene {p.scene} seed {p.seed}, {tag}, "
+        f"ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}, folder {folder}")
     supervisor = None
     try:
         trace = folder / "head_trace.csv"
@@ -87,15 +92,16 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
                                                      {**p.positioner_overrides, "port": port})])
         group.start("scene_camera", [find_executable("scene_camera"), *_ros_args(
             pdir / "scene_camera.yaml", {**p.scene_camera_overrides, "autostart": False, "scene": p.scene,
-                                         "seed": p.seed, "duration_s": p.duration_s + 5.0})])
+                                         "seed": p.seed, "duration_s": p.duration_s + 5.0})],
+                    nice=p.sim_nice)
         group.start("tracker", [find_executable("tracker"), *_ros_args(
             pdir / "tracker.yaml", {**p.tracker_overrides, "ego_motion_compensation": ego})])
         supervisor = group.start("demo_supervisor", [
             sys.executable, "-m", "swir_tracker_ros.nodes.demo_supervisor_node", "--out", str(folder),
             "--duration", str(p.duration_s), "--label", p.scene, "--ego", str(int(ego)),
             "--storage", p.storage, "--bag-images", str(int(p.bag_images)),
-            "--startup-timeout", str(p.startup_timeout_s),
-            "--snapshots", *[str(s) for s in p.snapshots]])
+            "--startup-timeout", str(p.startup_timeout_s), "--video", str(int(video)),
+            "--snapshots", *([str(s) for s in p.snapshots] if video else [])], nice=p.sim_nice)
         deadline = time.monotonic() + p.startup_timeout_s + p.duration_s + 30.0
         while supervisor.proc.poll() is None:
             dead = [m for m in group.dead() if m is not supervisor]
@@ -120,6 +126,10 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print) -> 
                      exits)
 
 
+def _folder_mb(path: Path) -> float:
+    return sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
+
+
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog="demo", description=__doc__)
     ap.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder (default out/demo)")
@@ -129,10 +139,20 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                     help="only the run with ego-motion compensation")
     ap.add_argument("--params", type=Path, default=None,
                     help="demo parameters YAML (default params/demo.yaml)")
+    ap.add_argument("--scene", default=None, help=f"scene (default: params/demo.yaml): {', '.join(VARIANTS)} "
+                    "or a harness scenario name")
+    ap.add_argument("--seed", type=int, default=None, help="scene seed (default: params/demo.yaml)")
+    ap.add_argument("--bag-images", action="store_true",
+                    help="record /camera/image_raw in the bag (~14 MB/s; off by default)")
     return ap.parse_args(argv)
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["sweep"]:
+        from swir_tracker_ros.demo.sweep import main as sweep_main
+
+        return sweep_main(argv[1:])
     args = parse_args(argv)
     if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
         # Started in the background by a non-interactive shell: SIGINT is ignored and the children would
@@ -140,8 +160,8 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         p = load_demo_params(args.params)
-        if args.duration is not None:
-            p = p.with_duration(args.duration)
+        p = p.with_overrides(duration_s=args.duration, scene=args.scene, seed=args.seed,
+                             bag_images=True if args.bag_images else None)
         out = args.out.resolve()
         out.mkdir(parents=True, exist_ok=True)
         started = time.monotonic()
@@ -167,12 +187,19 @@ def main(argv: list[str] | None = None) -> int:
             files[f"debug frame {still.stem} ({name})"] = os.path.relpath(still, out)
     files["plot: centring error"] = "plots/centring_error.png"
     files["plot: head angles"] = "plots/head_angles.png"
+    from swir_tracker_ros.demo import sweep
+
+    rows = [sweep.row_from(p.scene, p.seed, r.records.ego_motion_compensation, 1, r.summary, r.folder)
+            for r in results]
     paths = write_reports(out, [r.summary for r in results], {
+        "sweep_markdown": sweep.markdown(rows),
         "files": files, "processes": {RUN_DIRS[r.records.ego_motion_compensation]: r.exits for r in results},
         "wall_time_s": time.monotonic() - started, "scene": p.scene, "seed": p.seed,
         "machine": {"cpus": os.cpu_count(), "load_average_start": round(load_before, 2),
                     "load_average_end": round(os.getloadavg()[0], 2)}})
     print(text_table([r.summary for r in results]))
+    print("\n" + sweep.text(rows))
+    print(f"[demo] output folder {out}: {_folder_mb(out):.1f} MB")
     print(f"\n[demo] finished in {time.monotonic() - started:.0f} s; load average {load_before:.1f} at the "
           f"start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} CPUs.")
     print(f"[demo] report: {paths['html']}  (open it in a browser, e.g. `xdg-open {paths['html']}`)")

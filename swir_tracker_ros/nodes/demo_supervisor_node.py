@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -66,6 +67,17 @@ def debug_frame(msg: Image):
     return frame
 
 
+def init_answered(first_init_stamp: float, state: str, state_stamp: float) -> bool:
+    """The tracker has taken /track/init: it reports an active state for a frame at or after the frame of
+    the FIRST init sent (resends carry the same target on later frames).
+
+    Comparing with the latest resend instead made the supervisor chase the tracker's replies, which are
+    stamped a few frames back, for seconds on a loaded machine, while the head, already following the
+    track, turned towards the paused target and past it (2.3 deg in one run).
+    """
+    return state in ("tracking", "occluded") and state_stamp >= first_init_stamp
+
+
 class DemoSupervisor(Node):
     """Phases: wait for the graph, initialise the track, start the scene, record for `duration` seconds."""
 
@@ -99,6 +111,11 @@ class DemoSupervisor(Node):
         for topic, type_name in RECORDED_TOPICS.items():
             if topic == "/track/init":
                 continue  # recorded as published by this node
+            if topic == "/camera/image_raw" and self._skip_images:
+                # Not recorded: do not take a 0.6 MB reliable copy of every frame from the camera (its CPU
+                # is the tracker's on a small machine); the frame stamps come from /camera/camera_info,
+                # which the camera publishes with the same header for every image.
+                continue
             qos = IMAGE_QOS if type_name == "sensor_msgs/msg/Image" else RECORD_QOS
             self.create_subscription(TYPES[type_name], topic, self._make_cb(topic), qos, raw=True)
         if self.video is not None:
@@ -161,7 +178,9 @@ class DemoSupervisor(Node):
             pan, tilt, stamp = joint_state_to_pan_tilt(msg)
             self.rec.joints.append([stamp, now, pan, tilt])
             self.joints_seen = True
-        elif topic == "/camera/camera_info" and not self.rec.camera:
+        elif topic == "/camera/camera_info" and self._skip_images:
+            self.rec.frames.append([stamp_to_seconds(msg.header.stamp), now])
+        if topic == "/camera/camera_info" and not self.rec.camera:
             intr = intrinsics_from_camera_info(msg)
             self.rec.camera = {"width": intr.width, "height": intr.height, "fx": intr.fx, "fy": intr.fy,
                                "cx": intr.cx, "cy": intr.cy}
@@ -230,8 +249,7 @@ class DemoSupervisor(Node):
                            f"{self.start_client.service_is_ready()}, inputs without a discovered publisher "
                            f"{missing or 'none'}")
         elif self.phase == "init":
-            tracking = self.latest_state in ("tracking", "occluded")
-            if tracking and self.latest_state_stamp >= self.rec.init_time:
+            if init_answered(self.rec.init_time, self.latest_state, self.latest_state_stamp):
                 self.start_future = self.start_client.call_async(Trigger.Request())
                 self._set_phase("start")
             elif waited > self.args.init_timeout:
@@ -263,7 +281,8 @@ class DemoSupervisor(Node):
             from rclpy.serialization import serialize_message
 
             self.bag.write("/track/init", int(now * 1e9), serialize_message(roi))
-        self.rec.init_time = self.latest_gt_stamp
+        if math.isnan(self.rec.init_time):  # the first init's frame (see `init_answered`)
+            self.rec.init_time = self.latest_gt_stamp
         self.rec.init_box = [float(roi.x_offset), float(roi.y_offset), float(roi.width), float(roi.height)]
         self.last_init_pub = now
         self.get_logger().info(f"/track/init {self.rec.init_box} from ground truth")
