@@ -164,7 +164,7 @@ class StageTimer:
 
 
 # (module, attribute or Class.method, stage, phase?) - looked up by name and skipped when absent, so the
-# profile survives refactors of tracker.py / detector.py; functions imported by name into other modules
+# profile survives refactors of tracker.py / core/base.py; functions imported by name into other modules
 # are replaced there too (every loaded swir_tracker_ros module is searched for the same object).
 STAGES = (
     ("swir_tracker_ros.core.conditioning", "FrameConditioner.__call__", "conditioning", False),
@@ -180,9 +180,11 @@ STAGES = (
     ("swir_tracker_ros.core.kcf", "KCF.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.dcf_ca", "DCFCA.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.confidence", "analyse", "peak/PSR analysis", False),
-    ("swir_tracker_ros.core.detector", "FilterBank.detect", "scale search", True),
-    ("swir_tracker_ros.core.detector", "FilterBank.detect_grid", "grid", True),
-    ("swir_tracker_ros.core.detector", "FilterBank.train", "model update", True),
+    ("swir_tracker_ros.core.base", "BaseFilter.detect", "scale search", True),
+    ("swir_tracker_ros.core.base", "BaseFilter.detect_grid", "grid", True),
+    ("swir_tracker_ros.core.base", "BaseFilter.train_memory", "model update", True),
+    ("swir_tracker_ros.core.filters", "KCFFilter.train", "model update", True),
+    ("swir_tracker_ros.core.filters", "DCFCAFilter.train", "model update", True),
     ("swir_tracker_ros.core.kcf", "KCF.train", "model update", False),
     ("swir_tracker_ros.core.dcf_ca", "DCFCA.train", "model update", False),
 )
