@@ -34,7 +34,8 @@ def test_docs_tables_match_the_dataclasses(doc: str, cls: type, prefix: str) -> 
 def test_tracker_feature_default_is_the_code_default() -> None:
     """The drift the issue found: the doc said 'hog' while the code and params file said 'hog_soft'."""
     text = (REPO / "docs" / "tracker_node.md").read_text()
-    row = next(r for r in markdown_rows(TrackerParams, "tracker.") if r.startswith("| `tracker.kcf.feature` |"))
+    rows = markdown_rows(TrackerParams, "tracker.")
+    row = next(r for r in rows if r.startswith("| `tracker.kcf.feature` |"))
     assert f"`{TrackerParams().kcf.feature!r}`" in row and row in text
 
 
