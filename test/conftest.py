@@ -136,3 +136,17 @@ class SpinningProbe:
                 return True
             self.executor.spin_once(timeout_sec=0.02)
         return bool(predicate())
+
+
+@pytest.fixture
+def context():
+    """An rclpy context of its own for an in-process node test, shut down afterwards."""
+    import rclpy
+    from rclpy.context import Context
+
+    ctx = Context()
+    rclpy.init(context=ctx)
+    try:
+        yield ctx
+    finally:
+        rclpy.try_shutdown(context=ctx)

@@ -13,7 +13,6 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-import rclpy
 from conftest import ProcessSet, ros_probe
 from rclpy.context import Context
 from rclpy.parameter import Parameter
@@ -60,16 +59,6 @@ def odd_frames() -> dict[str, Image]:
 
 
 # ------------------------------------------------------------------ in-process
-@pytest.fixture
-def context() -> Iterator[Context]:
-    ctx = Context()
-    rclpy.init(context=ctx)
-    try:
-        yield ctx
-    finally:
-        rclpy.try_shutdown(context=ctx)
-
-
 class Node:
     """A TrackerNode with its /track/state and /track/box captured, fed at a 25 Hz stamp clock."""
 

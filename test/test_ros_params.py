@@ -3,12 +3,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-import rclpy
 from rcl_interfaces.msg import ParameterType
 from rclpy.context import Context
 from rclpy.node import Node
@@ -30,16 +28,6 @@ class DemoParams:
     def validate(self) -> None:
         if self.box and len(self.box) != 4:
             raise ParameterError(f"parameter box must have 4 values (x, y, w, h), got {len(self.box)}")
-
-
-@pytest.fixture
-def context() -> Iterator[Context]:
-    ctx = Context()
-    rclpy.init(context=ctx)
-    try:
-        yield ctx
-    finally:
-        rclpy.try_shutdown(context=ctx)
 
 
 def make_node(ctx: Context, name: str = "params_test", **kw) -> Node:

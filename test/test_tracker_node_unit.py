@@ -5,11 +5,9 @@ from __future__ import annotations
 
 import array
 import math
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
-import rclpy
 import yaml
 from conftest import REPO
 from rclpy.context import Context
@@ -48,16 +46,6 @@ def scene(cx: float, cy: float, width: int = W, height: int = H, seed: int = 0) 
     x0, y0 = round(cx - TW / 2), round(cy - TW / 2)
     img[y0:y0 + TW, x0:x0 + TW] += 6000.0 * PATCH
     return np.clip(img, 0, 65535).astype(np.uint16)
-
-
-@pytest.fixture
-def context() -> Iterator[Context]:
-    ctx = Context()
-    rclpy.init(context=ctx)
-    try:
-        yield ctx
-    finally:
-        rclpy.try_shutdown(context=ctx)
 
 
 class Capture:
