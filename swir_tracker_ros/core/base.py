@@ -124,11 +124,14 @@ class BaseFilter(ABC):
         wins = [window.shifted(i * sx * c * kx, j * sy * c * ky) for j in (-1, 0, 1) for i in (-1, 0, 1)]
         return sx, sy, wins
 
-    def grid_features(self, img: np.ndarray, window: Box, overlap: float) -> tuple[np.ndarray, list[Box]]:
-        """Windowed feature maps (9, C, rows, cols) of the 3x3 grid, from ONE feature computation.
+    def grid_features(
+        self, img: np.ndarray, window: Box, overlap: float, keep: Sequence[int] = tuple(range(9))
+    ) -> tuple[np.ndarray, list[Box]]:
+        """Windowed feature maps (len(keep), C, rows, cols) of the grid windows `keep` (row-major indices
+        of the 3x3 grid) from ONE feature computation, and all 9 grid windows.
 
         The union of the 9 windows is resampled once at the template scale, its features computed once,
-        and each window's map cut out of it (the windows sit on whole cells of the union), so the grid
+        and each kept window's map cut out of it (the windows sit on whole cells of the union), so the grid
         costs (1 + 2 (1 - overlap))^2 ~ 5.4 windows of features instead of 9.
         """
         sx, sy, wins = self.grid_geometry(window, overlap)
@@ -139,10 +142,10 @@ class BaseFilter(ABC):
         feats = unwindowed_features(sample_patch(img, union, uw, uh)[None], self.kind, c)[0]
         fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
         win = cosine_window(fh, fw)
-        out = np.empty((9, feats.shape[0], fh, fw), dtype=np.float32)
-        for k in range(9):  # 9 slices of the union map (steps are whole cells; gray: cell = 1 px)
+        out = np.empty((len(keep), feats.shape[0], fh, fw), dtype=np.float32)
+        for i, k in enumerate(keep):  # slices of the union map (steps are whole cells; gray: cell = 1 px)
             r0, c0 = (k // 3) * sy, (k % 3) * sx
-            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[k])
+            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[i])
         return out, wins
 
     def detect_grid(
@@ -150,9 +153,9 @@ class BaseFilter(ABC):
     ) -> tuple[list[Detection], list[Box]]:
         """Detections in the 3x3 re-detection grid around `window` (the centre one left out if asked,
         as normal mode already correlated it) and the 9 grid windows; `scale` is copied to each."""
-        feats, wins = self.grid_features(img, window, overlap)
         keep = [k for k in range(9) if not (skip_centre and k == 4)]
-        responses = self.filter.respond(feats[keep])
+        feats, wins = self.grid_features(img, window, overlap, keep)
+        responses = self.filter.respond(feats)
         dets = self._detections(responses, [wins[k] for k in keep], [scale] * len(keep))
         return dets, wins
 
