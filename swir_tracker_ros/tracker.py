@@ -49,7 +49,7 @@ class Tracker:
     5-scale search at the prediction, failure detection (PSR < 7 for KCF, APCE <= 0.6 mean for DCF-CA),
     3x3 re-detection grid on failure, robust Kalman update with a peak-adaptive Huber threshold (the
     motion held while re-detecting, `_redetection_update`), and a model update only on confident frames.
-    Variant `cf` is the bare correlation filter. Variant `measured` (ours, opt-in) is
+    Variant `cf` is the bare correlation filter. Variant `measured` (ours, the default) is
     `robust_adaptive` whose confident frames report the correlation peak itself and whose `tracking`
     frames are verified by a long-term memory: on the real sequences the clipped robust update (eq. 33-35
     with eq. 38's k = 0.1-0.4 at the low peaks of a changing target) lags fast true motion until the window

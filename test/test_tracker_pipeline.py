@@ -350,12 +350,13 @@ def leaving_scene(seed: int, n: int = 80, gone: int = 30) -> tuple[list[np.ndarr
 
 
 @pytest.mark.parametrize("seed", [5, 6, 7])
-def test_memory_never_reports_tracking_on_background_after_the_target_left(seed: int) -> None:
+def test_default_never_reports_tracking_on_background_after_the_target_left(seed: int) -> None:
     """Issue 12 "no false lock": once the target has left, the tracker's box sits on background; the
-    long-term memory (LCT style) of variant `measured` rejects it, so no frame is `tracking`. The papers'
-    robust_adaptive reports `tracking` on background here (3-9 of the 49 frames for these seeds)."""
+    long-term memory (LCT style) of the default variant `measured` rejects it, so no frame is `tracking`.
+    The papers' robust_adaptive reports `tracking` on background here (3-9 of the 49 frames for these
+    seeds)."""
     frames, gts = leaving_scene(seed)
-    trk = Tracker(TrackerParams(variant="measured"))
+    trk = Tracker(TrackerParams())
     trk.init(frames[0], gts[0])
     states = [trk.update(f).state for f in frames[1:]]
     assert all(s is TrackState.TRACKING for s in states[:28])  # followed while visible

@@ -27,13 +27,13 @@ class TrackerParams:
     """
 
     variant: str = _f(
-        "robust_adaptive",
+        "measured",
         "cf: base filter only; kalman: standard KF + 9 windows + scale + gated "
         "update; robust: Huber k=1.5; robust_adaptive: k from the peak (paper 000 eq. 38 / "
         "dissertation eq. 6.9); robust_adaptive_r: plus adaptive R (dissertation eq. 5.95); measured "
-        "(ours): robust_adaptive, but a confident frame reports and searches from the correlation peak itself "
-        "(no posterior lag) and a long-term memory verifies every tracking frame (better on the real and "
-        "synthetic sets, loses the closed-loop demo's target: docs/tracking_core.md)",
+        "(ours, default): robust_adaptive, but a confident frame reports and searches from the correlation "
+        "peak itself (no posterior lag) and a long-term memory verifies every tracking frame "
+        "(docs/tracking_core.md)",
         choices=VARIANTS,
     )
     pipeline: str = _f(
