@@ -292,108 +292,78 @@ def _f(v: float | None, fmt: str = ".3f") -> str:
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
 
 
-def format_protocol(result: ProtocolResult) -> str:
-    """Per-sequence OPE and SRE tables (trackers side by side), then the summary per group of sequences."""
+# (label, summary key, format) of the summary rows, in print order
+_MEAN_ROWS = (("OPE mean AUC", "ope_auc", ".3f"), ("OPE mean P@20", "ope_precision_20", ".3f"),
+              ("OPE false tracking frames", "ope_false_tracking", "d"),
+              ("OPE IoU=0 frames", "ope_zero_iou", "d"),
+              ("SRE mean AUC", "sre_auc", ".3f"), ("SRE mean P@20", "sre_precision_20", ".3f"),
+              ("SRE spread (max-min, mean)", "sre_spread", ".3f"),
+              ("SRE false tracking (all runs)", "sre_false_tracking", "d"),
+              ("SRE IoU=0 frames (all runs)", "sre_zero_iou", "d"), ("fps (OPE, mean)", "fps", ".1f"))
+
+Table = tuple[str, str, list[tuple[str, list[str]]]]  # (title, label column, [(label, a cell per tracker)])
+
+
+def protocol_tables(result: ProtocolResult) -> list[Table]:
+    """The protocol's tables, trackers side by side: per group of sequences the per-sequence OPE and SRE
+    tables, then the means (and occlusions survived on the synthetic group). Both renderers lay these out."""
     tr = result.trackers
-    out: list[str] = []
-    w = 22
+    tables: list[Table] = []
     for group, seqs in result.groups().items():
         title = "real sequences" if group == "real" else "synthetic scenarios"
         if "ope" in result.protocols:
-            head = f"{'OPE ' + title + ': AUC / P@20 / FT':<44}" + "".join(f"{t:>{w}}" for t in tr)
-            out += [head, "-" * len(head)]
+            rows = []
             for s in seqs:
-                cells = []
-                for t in tr:
-                    r = result.stats[s][t].get("none")
-                    cells.append("-" if r is None else
-                                 f"{r.success_auc:.3f}/{r.precision_20:.2f}/{r.false_tracking}")
-                out.append(f"{s:<44}" + "".join(f"{c:>{w}}" for c in cells))
-            out.append("")
+                runs = [result.stats[s][t].get("none") for t in tr]
+                rows.append((s, ["-" if r is None else f"{r.success_auc:.3f} / {r.precision_20:.2f} / "
+                                 f"{r.false_tracking}" for r in runs]))
+            tables.append((f"OPE {title}: AUC / P@20 / FT", "sequence", rows))
         if "sre" in result.protocols:
-            head = f"{'SRE ' + title + ': AUC mean [min, max]':<44}" + "".join(f"{t:>{w}}" for t in tr)
-            out += [head, "-" * len(head)]
+            rows = []
             for s in seqs:
-                cells = []
-                for t in tr:
-                    v = result.sre(s, t)
-                    cells.append("-" if v is None else f"{v['mean']:.3f} [{v['min']:.2f},{v['max']:.2f}]")
-                out.append(f"{s:<44}" + "".join(f"{c:>{w}}" for c in cells))
-            out.append("")
-        rows = [("OPE mean AUC", "ope_auc", ".3f"), ("OPE mean P@20", "ope_precision_20", ".3f"),
-                ("OPE false tracking frames", "ope_false_tracking", "d"),
-                ("OPE IoU=0 frames", "ope_zero_iou", "d"),
-                ("SRE mean AUC", "sre_auc", ".3f"), ("SRE mean P@20", "sre_precision_20", ".3f"),
-                ("SRE spread (max-min, mean)", "sre_spread", ".3f"),
-                ("SRE false tracking (all runs)", "sre_false_tracking", "d"),
-                ("SRE IoU=0 frames (all runs)", "sre_zero_iou", "d"), ("fps (OPE, mean)", "fps", ".1f")]
-        summ = {t: result.summary(t, seqs) for t in tr}
-        head = f"{'MEAN ' + title + f' ({len(seqs)})':<44}" + "".join(f"{t:>{w}}" for t in tr)
-        out += [head, "-" * len(head)]
-        for name, key, fmt in rows:
-            if any(key in summ[t] for t in tr):
-                out.append(f"{name:<44}" + "".join(f"{_f(summ[t].get(key), fmt):>{w}}" for t in tr))
+                sre = [result.sre(s, t) for t in tr]
+                rows.append((s, ["-" if v is None else f"{v['mean']:.3f} [{v['min']:.3f}, {v['max']:.3f}]"
+                                 for v in sre]))
+            tables.append((f"SRE {title}: AUC mean [min, max] over the starts", "sequence", rows))
+        summ = [result.summary(t, seqs) for t in tr]
+        rows = [(name, [_f(m.get(key), fmt) for m in summ])
+                for name, key, fmt in _MEAN_ROWS if any(key in m for m in summ)]
         if group == "synth":
             for proto, pre in (("OPE", "ope"), ("SRE", "sre")):
-                if any(f"{pre}_occlusions" in summ[t] for t in tr):
-                    cells = []
-                    for t in tr:
-                        n, k = summ[t].get(f"{pre}_occlusions"), summ[t].get(f"{pre}_survived")
-                        cells.append("-" if not n else f"{k}/{n} = {100.0 * k / n:.0f} %")
-                    out.append(f"{proto + ' occlusions survived':<44}" + "".join(f"{c:>{w}}" for c in cells))
+                if any(f"{pre}_occlusions" in m for m in summ):
+                    counts = [(m.get(f"{pre}_occlusions"), m.get(f"{pre}_survived")) for m in summ]
+                    rows.append((f"{proto} occlusions survived",
+                                 ["-" if not n else f"{k}/{n} ({100.0 * k / n:.0f} %)" for n, k in counts]))
+        tables.append((f"MEAN {title} ({len(seqs)})", "", rows))
+    return tables
+
+
+def _footer(result: ProtocolResult) -> str:
+    return (f"commit {result.meta.get('commit')}, OpenCV {result.meta.get('opencv', '-')}, SRE style "
+            f"{result.meta.get('style')}, FT = frames in state tracking (OpenCV: ok) with IoU 0; "
+            "frames after the start frame scored")
+
+
+def format_protocol(result: ProtocolResult) -> str:
+    """`protocol_tables` as fixed-width text (the harness's console output)."""
+    out: list[str] = []
+    w = 22
+    for title, _, rows in protocol_tables(result):
+        head = f"{title:<44}" + "".join(f"{t:>{w}}" for t in result.trackers)
+        out += [head, "-" * len(head)]
+        out += [f"{label:<44}" + "".join(f"{c:>{w}}" for c in cells) for label, cells in rows]
         out.append("")
-    out.append(f"commit {result.meta.get('commit')}, OpenCV {result.meta.get('opencv', '-')}, SRE style "
-               f"{result.meta.get('style')}, FT = frames in state tracking (OpenCV: ok) with IoU 0; "
-               "frames after the start frame scored")
+    out.append(_footer(result))
     return "\n".join(out)
 
 
 def format_markdown(result: ProtocolResult) -> str:
-    """The same tables as `format_protocol` in Markdown (for docs and issue notes)."""
+    """`protocol_tables` in Markdown (for docs and issue notes)."""
     tr = result.trackers
     out: list[str] = []
-    for group, seqs in result.groups().items():
-        title = "real sequences" if group == "real" else "synthetic scenarios"
-        head = "| sequence | " + " | ".join(tr) + " |"
-        rule = "|---|" + "---|" * len(tr)
-        if "ope" in result.protocols:
-            out += [f"OPE, {title}: success AUC / P@20 / false-tracking frames", "", head, rule]
-            for s in seqs:
-                cells = []
-                for t in tr:
-                    r = result.stats[s][t].get("none")
-                    cells.append("-" if r is None else
-                                 f"{r.success_auc:.3f} / {r.precision_20:.2f} / {r.false_tracking}")
-                out.append(f"| {s} | " + " | ".join(cells) + " |")
-            out.append("")
-        if "sre" in result.protocols:
-            out += [f"SRE, {title}: success AUC mean [min, max] over the 12 starts", "", head, rule]
-            for s in seqs:
-                cells = []
-                for t in tr:
-                    v = result.sre(s, t)
-                    cells.append("-" if v is None else f"{v['mean']:.3f} [{v['min']:.3f}, {v['max']:.3f}]")
-                out.append(f"| {s} | " + " | ".join(cells) + " |")
-            out.append("")
-        summ = {t: result.summary(t, seqs) for t in tr}
-        out += [f"Means, {title} ({len(seqs)})", "", "| | " + " | ".join(tr) + " |", rule]
-        rows = [("OPE AUC", "ope_auc", ".3f"), ("OPE P@20", "ope_precision_20", ".3f"),
-                ("OPE false tracking", "ope_false_tracking", "d"), ("OPE IoU=0 frames", "ope_zero_iou", "d"),
-                ("SRE AUC", "sre_auc", ".3f"), ("SRE P@20", "sre_precision_20", ".3f"),
-                ("SRE spread", "sre_spread", ".3f"), ("SRE false tracking", "sre_false_tracking", "d"),
-                ("SRE IoU=0 frames", "sre_zero_iou", "d"), ("fps (OPE)", "fps", ".1f")]
-        for name, key, fmt in rows:
-            if any(key in summ[t] for t in tr):
-                out.append(f"| {name} | " + " | ".join(_f(summ[t].get(key), fmt) for t in tr) + " |")
-        if group == "synth":
-            for proto, pre in (("OPE", "ope"), ("SRE", "sre")):
-                if any(f"{pre}_occlusions" in summ[t] for t in tr):
-                    cells = []
-                    for t in tr:
-                        n, k = summ[t].get(f"{pre}_occlusions"), summ[t].get(f"{pre}_survived")
-                        cells.append("-" if not n else f"{k}/{n} ({100.0 * k / n:.0f} %)")
-                    out.append(f"| {proto} occlusions survived | " + " | ".join(cells) + " |")
+    for title, column, rows in protocol_tables(result):
+        out += [title, "", f"| {column} | " + " | ".join(tr) + " |", "|---|" + "---|" * len(tr)]
+        out += [f"| {label} | " + " | ".join(cells) + " |" for label, cells in rows]
         out.append("")
-    out.append(f"commit {result.meta.get('commit')}, OpenCV {result.meta.get('opencv', '-')}, "
-               f"SRE style {result.meta.get('style')}")
+    out.append(_footer(result))
     return "\n".join(out)
