@@ -311,7 +311,6 @@ def test_tracker_node_passes_elapsed_frames_once_the_core_takes_them(monkeypatch
             return TrackResult(box=Box(10.0, 10.0, 8.0, 8.0), state=TrackState.TRACKING, measured=True)
 
     monkeypatch.setattr(tracker_node, "Tracker", Core)
-    monkeypatch.setattr(tracker_node, "_UPDATE_TAKES_FRAMES", True)
     ctx = Context()
     rclpy.init(context=ctx)
     try:

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import sys
 import textwrap
 import time
@@ -52,10 +51,6 @@ SENSOR_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=R
 OUTPUT_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 DEBUG_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 ACTIVE = (TrackState.TRACKING, TrackState.OCCLUDED)
-# Tracker.update(..., frames=<elapsed frame periods>) advances the Kalman prediction over skipped frames
-# (core contract item 3); passed only once the core accepts it.
-_UPDATE_TAKES_FRAMES = "frames" in inspect.signature(Tracker.update).parameters
-
 
 class TrackerNode(Node):
     """Wraps `Tracker`; owns no algorithm: decode, call the core, publish, keep statistics."""
@@ -135,10 +130,9 @@ class TrackerNode(Node):
             return
         skipped_before = self.stats.skipped
         self.stats.frame_stamp(stamp)
-        if _UPDATE_TAKES_FRAMES:  # frames since the last processed one: 1 + those skipped in between
-            hint_frames = {"frames": 1.0 + max(self.stats.skipped - skipped_before, 0)}
-        else:
-            hint_frames = {}
+        # frames since the last processed one (1 + those skipped in between): the core's Kalman prediction
+        # advances over them (Tracker.update(frames=...))
+        elapsed = 1.0 + max(self.stats.skipped - skipped_before, 0)
         self.last_stamp = stamp
         pixels = frame.pixels
         height, width = pixels.shape[:2]
@@ -150,7 +144,7 @@ class TrackerNode(Node):
         shift = self._ego_shift(stamp, intr)
         hint = {"bit_depth": self.params.bit_depth or frame.bit_depth} if pixels.dtype.itemsize == 2 else {}
         t_core = time.perf_counter()
-        result = self._track(pixels, shift, hint, hint_frames)
+        result = self._track(pixels, shift, hint, elapsed)
         core_ms = (time.perf_counter() - t_core) * 1e3
         self._publish(msg.header, result, intr)
         if self.pub_debug.get_subscription_count() > 0:
@@ -286,7 +280,7 @@ class TrackerNode(Node):
             return (0.0, 0.0)
         return ego_shift(pose[0] - prev[0], pose[1] - prev[1], intr)
 
-    def _track(self, pixels, shift: tuple[float, float], hint: dict, elapsed: dict | None = None
+    def _track(self, pixels, shift: tuple[float, float], hint: dict, elapsed: float = 1.0
                ) -> TrackResult | None:
         if self.pending_init is not None:
             box, self.pending_init = self.pending_init, None
@@ -308,7 +302,7 @@ class TrackerNode(Node):
         if self.tracker.state is TrackState.IDLE:
             self.last_result = None
             return None
-        result = self.tracker.update(pixels, ego_shift=shift, **hint, **(elapsed or {}))
+        result = self.tracker.update(pixels, ego_shift=shift, **hint, frames=elapsed)
         self.last_result = result
         if result.state in ACTIVE:
             self.last_box = result.box
