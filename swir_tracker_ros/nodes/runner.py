@@ -28,31 +28,32 @@ ROS_ARGS, END_ROS_ARGS = "--ros-args", "--"
 HELP_FLAGS = ("-h", "--help")
 
 
-def user_arguments(argv: list[str]) -> list[str]:
-    """The arguments after the program name outside `--ros-args ... [--]` blocks (never raises, unlike
-    `rclpy.utilities.remove_ros_args` on a malformed rule)."""
-    out, in_ros = [], False
+def split_arguments(argv: list[str]) -> tuple[list[str], list[str]]:
+    """(user arguments, ROS arguments) after the program name: what lies inside `--ros-args ... [--]`
+    blocks and what lies outside (never raises, unlike `rclpy.utilities.remove_ros_args` on a malformed
+    rule)."""
+    user: list[str] = []
+    ros: list[str] = []
+    in_ros = False
     for arg in argv[1:]:
         if arg == ROS_ARGS:
             in_ros = True
         elif in_ros and arg == END_ROS_ARGS:
             in_ros = False
-        elif not in_ros:
-            out.append(arg)
-    return out
+        else:
+            (ros if in_ros else user).append(arg)
+    return user, ros
+
+
+def user_arguments(argv: list[str]) -> list[str]:
+    """The arguments after the program name outside `--ros-args ... [--]` blocks."""
+    return split_arguments(argv)[0]
 
 
 def _ros_option(argv: list[str], flags: tuple[str, ...]) -> list[str]:
-    """The values of `flags` inside `--ros-args` blocks ('' when a flag ends the command line)."""
-    values, in_ros = [], False
-    for i, arg in enumerate(argv):
-        if arg == ROS_ARGS:
-            in_ros = True
-        elif in_ros and arg == END_ROS_ARGS:
-            in_ros = False
-        elif in_ros and arg in flags:
-            values.append(argv[i + 1] if i + 1 < len(argv) else "")
-    return values
+    """The values of `flags` inside `--ros-args` blocks ('' when a flag ends them)."""
+    ros = split_arguments(argv)[1]
+    return [ros[i + 1] if i + 1 < len(ros) else "" for i, arg in enumerate(ros) if arg in flags]
 
 
 def check_ros_args(argv: list[str]) -> None:
