@@ -96,6 +96,7 @@ class Tracker:
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
         self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
         self._memory = False
+        self._lattice = False
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -121,6 +122,7 @@ class Tracker:
         self._bank = make_filter(p, b.w, b.h)  # the pipeline's base tracker, selected once
         self._bank.initialise(img, b)
         self._memory = p.memory_ratio > 0.0 and p.variant == "measured"  # the papers' variants: none
+        self._lattice = p.lattice_step > 0.0 and p.variant == "measured"
         if self._memory:
             self._bank.start_memory()
         self._box = b
@@ -218,9 +220,15 @@ class Tracker:
             # Re-detection measures no size (it is taken from the prediction), so nothing could correct
             # a size velocity: hold the size instead of extrapolating it through the whole occlusion.
             kf.x[self._size_rates] = 0.0
+            if p.variant == "measured":
+                kf.x[self._centre_rates] *= p.coast_velocity_decay
             mid = len(wins) // 2
             # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
-            cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)
+            if self._lattice:
+                cand, grid = bank.detect_lattice(img, wins[mid], p.lattice_step, self._rings())
+                grid = [wins[mid], *grid]
+            else:
+                cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)
             if p.grid_scale_search:
                 cand = [*dets, *cand]
                 for i, f in enumerate(factors):
@@ -251,7 +259,10 @@ class Tracker:
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
         self._box = self._clamp_size(out)
-        rejected = not failed and not self._verified(img, best)
+        # (ours) coming back from an occlusion takes a peak like the tracked target's, and the memory's word
+        rejected = not failed and (
+            (self._occluded > 0 and self._weak(det.peak)) or not self._verified(img, best)
+        )
         updated = self._maybe_train(img, det, failed or rejected)
         if failed or rejected:
             self._occluded += 1
@@ -320,8 +331,7 @@ class Tracker:
         if adaptive and outer and self._bank.threshold_map.at_floor(peak):
             return kf.update(None, threshold=k)
         # (ours) a jump to another window must look like the target did when it was tracked
-        weak = self._peak_n and peak < p.redetect_peak_ratio * self._peak_sum / self._peak_n
-        if outer and weak:
+        if outer and self._weak(peak):
             return kf.update(None, threshold=k)
         held = kf.x[self._centre_rates].copy()
         info = kf.update(z, threshold=k)
@@ -348,6 +358,19 @@ class Tracker:
         if m >= mean and p.memory_rate > 0.0:
             bank.train_memory(img, self._box, p.memory_rate)
         return True
+
+    def _weak(self, peak: float) -> bool:
+        """(ours, variant measured) Is `peak` too weak to re-acquire the target (`redetect_peak_ratio`)?"""
+        p = self.params
+        if p.variant != "measured" or not self._peak_n:
+            return False
+        return peak < p.redetect_peak_ratio * self._peak_sum / self._peak_n
+
+    def _rings(self) -> int:
+        """Rings of the re-detection lattice: they widen with the frames since the last confident frame."""
+        p = self.params
+        grow = self._occluded // p.lattice_widen_frames if p.lattice_widen_frames > 0 else 0
+        return max(p.lattice_rings, min(p.lattice_rings + grow, p.lattice_max_rings))
 
     def _failure(self, det: Detection) -> bool:
         """Failure detection of the pipeline: PSR < 7 (paper 000) or APCE <= 0.6 x mean APCE (eq. 4.96)."""

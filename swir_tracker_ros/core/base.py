@@ -171,6 +171,74 @@ class BaseFilter(ABC):
         responses = self.filter.respond(feats)
         return self._detections(responses, windows, scales if scales is not None else [1.0] * len(windows))
 
+    def lattice_geometry(
+        self, window: Box, step: float, rings: int, image_size: tuple[int, int] | None = None
+    ) -> tuple[int, int, list[tuple[int, int]], list[Box]]:
+        """Re-detection lattice of (2 rings + 1)^2 windows around `window` (ours; variant measured).
+
+        Centre steps are `step` x the window, snapped to whole template cells so that every window is a
+        slice of one feature map (as in `grid_geometry`). Offsets whose window centre falls outside the
+        image (`image_size` = (width, height)) are left out, and so is the centre (normal mode already
+        correlated it). Returns (step_x, step_y) in cells, the (i, j) offsets in steps and their windows.
+        """
+        c = self.cell
+        sx = max(1, round(step * self.tw / c))
+        sy = max(1, round(step * self.th / c))
+        kx, ky = window.w / self.tw, window.h / self.th
+        offsets, wins = [], []
+        for j in range(-rings, rings + 1):
+            for i in range(-rings, rings + 1):
+                if i == 0 and j == 0:
+                    continue
+                win = window.shifted(i * sx * c * kx, j * sy * c * ky)
+                if image_size is not None and not (
+                    0.0 <= win.cx < image_size[0] and 0.0 <= win.cy < image_size[1]
+                ):
+                    continue
+                offsets.append((i, j))
+                wins.append(win)
+        return sx, sy, offsets, wins
+
+    def detect_lattice(
+        self,
+        img: np.ndarray,
+        window: Box,
+        step: float,
+        rings: int,
+        scale: float = 1.0,
+    ) -> tuple[list[Detection], list[Box]]:
+        """Detections in the re-detection lattice around `window` (see `lattice_geometry`) and its windows.
+
+        The papers' 3x3 grid steps 2/3 of a window: a target midway between two windows sits a third of a
+        window off both centres, where the cosine window (KCF, Henriques et al. TPAMI 2015 Sec. 6.1)
+        has faded it out, and neither response finds it. Steps of about a third of a window keep every
+        point within a sixth of a window of some centre. One feature computation on the union of the
+        windows (kept inside the image); each window's map is a slice of it.
+        """
+        ih, iw = img.shape[:2]
+        sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih))
+        if not wins:
+            return [], []
+        c = self.cell
+        cols = [i for i, _ in offsets] + [0]
+        rows = [j for _, j in offsets] + [0]
+        ilo, ihi, jlo, jhi = min(cols), max(cols), min(rows), max(rows)
+        uw = self.tw + (ihi - ilo) * sx * c
+        uh = self.th + (jhi - jlo) * sy * c
+        kx, ky = window.w / self.tw, window.h / self.th
+        ucx = window.cx + 0.5 * (ilo + ihi) * sx * c * kx
+        ucy = window.cy + 0.5 * (jlo + jhi) * sy * c * ky
+        union = Box.from_center(ucx, ucy, uw * kx, uh * ky)
+        feats = unwindowed_features(sample_patch(img, union, uw, uh)[None], self.kind, c)[0]
+        fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
+        cos = cosine_window(fh, fw)
+        out = np.empty((len(wins), feats.shape[0], fh, fw), dtype=np.float32)
+        for n, (i, j) in enumerate(offsets):
+            r0, c0 = (j - jlo) * sy, (i - ilo) * sx
+            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], cos, out=out[n])
+        responses = self.filter.respond(out)
+        return self._detections(responses, wins, [scale] * len(wins)), wins
+
     # ------------------------------------------------------------------ long-term memory (LCT style)
     def start_memory(self) -> None:
         """Keep a copy of the first-frame filter as the long-term memory of the target.

@@ -78,11 +78,40 @@ class TrackerParams:
         "off: KF size during re-detection (dissertation), 5x cheaper",
     )
     redetect_peak_ratio: float = _f(
-        0.0,
-        "(ours) while re-detecting, a peak in a window away from the prediction is a measurement only when "
-        "it reaches this ratio of the mean peak of the tracked frames (otherwise the filter coasts); 0: off",
+        0.6,
+        "(ours, variant measured) re-acquisition needs a peak of at least this ratio of the mean peak of "
+        "the tracked frames: a weaker peak in a window away from the prediction is no measurement (the "
+        "filter coasts), and a weaker first non-failed frame after an occlusion stays `occluded`; 0: off",
         0.0,
         2.0,
+    )
+    lattice_step: float = _f(
+        0.35,
+        "(ours, variant measured) re-detection searches a lattice of windows this fraction of a window "
+        "apart instead of the papers' 3x3 grid (steps of 1 - grid_overlap leave gaps a displaced target's "
+        "cosine-windowed response cannot bridge); 0: the 3x3 grid",
+        0.0,
+        1.0,
+    )
+    lattice_rings: int = _f(
+        2, "(ours) rings of the re-detection lattice around the prediction at the start of an occlusion "
+        "(2: 5x5 windows)", 1, 10
+    )
+    lattice_widen_frames: int = _f(
+        25,
+        "(ours) one more ring every this many frames since the last confident frame, up to "
+        "lattice_max_rings (windows outside the image are skipped); 0: no widening",
+        0,
+        100000,
+    )
+    lattice_max_rings: int = _f(3, "(ours) widest re-detection lattice (3: 7x7 windows)", 1, 10)
+    coast_velocity_decay: float = _f(
+        1.0,
+        "(ours, variant measured) per-frame factor on the centre velocity while re-detecting: 1 holds the "
+        "pre-occlusion motion (the papers' premise); below 1 the prediction slows down and stays near where "
+        "the target was last seen while the lattice widens around it",
+        0.0,
+        1.0,
     )
     memory_ratio: float = _f(
         0.5,

@@ -1,0 +1,104 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Re-detection of the default variant (issue 12 item 4, issue 13): the lattice and re-acquisition rules."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.windows import search_window
+from swir_tracker_ros.demo.world import build_scene
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.tracker import Tracker, TrackerParams
+from swir_tracker_ros.types import Box, TrackState
+
+FPS = 25.0
+PAPERS_REDETECTION = {"lattice_step": 0.0, "redetect_peak_ratio": 0.0}  # the 3x3 grid, no peak rule
+
+
+def demo_follow(seed: int, start: int, stop: int, params: TrackerParams) -> list[tuple[int, object, Box]]:
+    """The demo scene seen by a head that follows the pedestrian with a 0.8 s lag (exact ego shift given
+    to the tracker), tracked from frame `start` on its true box; (frame, result, true box) per frame."""
+    built = build_scene("demo", seed)
+    world, actor = built.world, built.world.actor(built.target_id)
+    gain = 1.0 - math.exp(-1.0 / (FPS * 0.8))
+    x, y = actor.path.position(start / FPS)
+    pan = math.atan2(x, y)
+    trk, out = Tracker(params), []
+    for k in range(start, stop):
+        x, y = actor.path.position(k / FPS)
+        new = pan + gain * (math.atan2(x, y) - pan)
+        view = CameraView(new, 0.0, 8.0)
+        img, truths = world.render(k / FPS, view)
+        truth = next(tr for tr in truths if tr.id == built.target_id)
+        if k == start:
+            trk.init(img, truth.box, bit_depth=16)
+        else:
+            out.append((k, trk.update(img, ego_shift=(view.fx * math.tan(new - pan), 0.0), bit_depth=16),
+                        truth.box))
+        pan = new
+    return out
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_demo_pedestrian_is_reacquired_after_stopping_behind_the_wall(seed: int) -> None:
+    """The demo's first occlusion (~9.2-10.9 s): the pedestrian stops behind the wall, then walks on
+    faster. It reappears between two windows of the papers' 3x3 grid, whose steps of 2/3 of a window
+    leave it a third of a window off both centres, where the cosine window has faded it out; meanwhile
+    weak peaks on the background (0.3 against the target's 0.7) pull the prediction away. The default
+    (lattice + peak rule) is `tracking` on the pedestrian within 0.5 s of its reappearance; the papers'
+    re-detection stays `occluded` on these seeds (measured: never re-acquired before 12 s)."""
+    def reacquired(params: TrackerParams) -> list[int]:
+        run = demo_follow(seed, 175, 300, params)
+        return [k for k, r, gt in run if k > 250 and r.state is TrackState.TRACKING
+                and abs(r.box.cx - gt.cx) < 0.3 * gt.w and abs(r.box.cy - gt.cy) < 0.3 * gt.h]
+
+    got = reacquired(TrackerParams())
+    assert got and got[0] <= 285, got[:3]
+    assert not reacquired(TrackerParams(**PAPERS_REDETECTION))
+
+
+def test_lattice_finds_a_target_midway_between_grid_windows() -> None:
+    """A window a third of a window to the side of the pedestrian: the 3x3 grid's neighbours sit a third
+    of a window off it on the other side, the lattice has one within a sixth (issue 12 item 4)."""
+    built = build_scene("demo", 1)
+    view = CameraView(0.0, 0.0, 8.0)
+    img, truths = built.world.render(0.0, view)
+    box = next(tr for tr in truths if tr.id == built.target_id).box
+    img = img.astype("float32") / 65535.0
+    p = TrackerParams()
+    bank = make_filter(p, box.w, box.h)
+    bank.initialise(img, box)
+    at = bank.detect(img, [search_window(box.cx, box.cy, box.w, box.h, bank.padding)])[0].peak
+    off = search_window(box.cx + box.w * (1.0 + bank.padding) / 3.0, box.cy, box.w, box.h, bank.padding)
+    grid = max(d.peak for d in bank.detect_grid(img, off, p.grid_overlap)[0])
+    lattice, wins = bank.detect_lattice(img, off, p.lattice_step, p.lattice_rings)
+    best = max(lattice, key=lambda d: d.peak)
+    assert best.peak > 0.75 * at > grid
+    assert abs(best.cx - box.cx) < 0.25 * box.w
+    assert len(wins) == (2 * p.lattice_rings + 1) ** 2 - 1
+
+
+def test_lattice_widens_with_the_frames_since_the_last_confident_frame() -> None:
+    p = TrackerParams(lattice_rings=2, lattice_widen_frames=10, lattice_max_rings=4)
+    trk = Tracker(p)
+    rings = []
+    for occluded in (0, 9, 10, 25, 1000):
+        trk._occluded = occluded
+        rings.append(trk._rings())
+    assert rings == [2, 2, 3, 4, 4]
+    trk.params = TrackerParams(lattice_widen_frames=0)
+    trk._occluded = 1000
+    assert trk._rings() == trk.params.lattice_rings
+
+
+def test_lattice_leaves_out_windows_centred_outside_the_image() -> None:
+    p = TrackerParams()
+    bank = make_filter(p, 20.0, 40.0)
+    win = search_window(5.0, 5.0, 20.0, 40.0, bank.padding)
+    _sx, _sy, offsets, wins = bank.lattice_geometry(win, 0.35, 2, (320, 240))
+    assert (0, 0) not in offsets
+    assert all(0.0 <= w.cx < 320 and 0.0 <= w.cy < 240 for w in wins)
+    assert len(wins) == 8  # the quarter of the 5x5 lattice to the right of and below the corner
