@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import cv2
 import numpy as np
@@ -236,7 +237,7 @@ class Tracker:
                         cand += bank.detect_grid(img, wins[i], p.grid_overlap, scale=f)[0]
             else:
                 cand = [dets[mid], *cand]
-            det = max(cand, key=lambda d: d.peak)
+            det = max(cand, key=self._redetection_score(pred, wins[mid]))
             shown = tuple(grid)
         size = (
             (pred.w * det.scale, pred.h * det.scale)
@@ -358,6 +359,23 @@ class Tracker:
         if m >= mean and p.memory_rate > 0.0:
             bank.train_memory(img, self._box, p.memory_rate)
         return True
+
+    def _redetection_score(self, pred: Box, window: Box) -> Callable[[Detection], float]:
+        """Ranking of the re-detection candidates: the peak, times a Gaussian motion prior (ours, measured).
+
+        The prior's sigma is `redetect_prior` x the lattice's half-width along each axis (rings x step x
+        window), so it widens with the lattice; `redetect_prior` 0 (and the papers' variants): the peak.
+        """
+        p = self.params
+        if not (self._lattice and p.redetect_prior > 0.0):
+            return lambda d: d.peak
+        half = p.redetect_prior * self._rings() * p.lattice_step
+        sx, sy = half * window.w, half * window.h
+
+        def score(d: Detection) -> float:
+            return d.peak * math.exp(-0.5 * (((d.cx - pred.cx) / sx) ** 2 + ((d.cy - pred.cy) / sy) ** 2))
+
+        return score
 
     def _weak(self, peak: float) -> bool:
         """(ours, variant measured) Is `peak` too weak to re-acquire the target (`redetect_peak_ratio`)?"""

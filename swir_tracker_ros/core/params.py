@@ -105,6 +105,15 @@ class TrackerParams:
         100000,
     )
     lattice_max_rings: int = _f(3, "(ours) widest re-detection lattice (3: 7x7 windows)", 1, 10)
+    redetect_prior: float = _f(
+        1.0,
+        "(ours, variant measured) re-detection picks the window whose peak x exp(-d^2 / 2 sigma^2) is "
+        "largest, d the distance of its peak from the prediction and sigma this factor x the lattice's "
+        "half-width (it widens with the lattice): a look-alike far away must beat the target's weaker "
+        "peak near the prediction by more than the distance costs; 0: the largest peak",
+        0.0,
+        10.0,
+    )
     coast_velocity_decay: float = _f(
         1.0,
         "(ours, variant measured) per-frame factor on the centre velocity while re-detecting: 1 holds the "
