@@ -31,7 +31,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from swir_tracker_ros.acquisition import crowd  # noqa: E402
+from swir_tracker_ros.scene import crowd  # noqa: E402
 from swir_tracker_ros.acquisition.association import Detection  # noqa: E402
 from swir_tracker_ros.acquisition.detectors import (  # noqa: E402
     Detector,

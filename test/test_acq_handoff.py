@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swir_tracker_ros.acquisition import crowd
+from swir_tracker_ros.scene import crowd
 from swir_tracker_ros.acquisition.association import CostWeights
 from swir_tracker_ros.acquisition.descriptors import describe
 from swir_tracker_ros.acquisition.handoff import (

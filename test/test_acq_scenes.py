@@ -7,7 +7,7 @@ import motmetrics as mm
 import numpy as np
 import pytest
 
-from swir_tracker_ros.acquisition import crowd
+from swir_tracker_ros.scene import crowd
 from swir_tracker_ros.acquisition.detectors import MotionDetector
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
 

@@ -51,8 +51,11 @@ Scenarios (``scenarios.py``)
     ``frame(k) -> SceneFrame(index, t, image, truths, target, view)`` (``target`` None when out of view,
     ``occluded`` = the per-frame occlusion flag); iterating a run yields every frame.
     ``crowd_world(seed, n=12, thermal=True, ...)``: ids 1..n pedestrians wandering over a wide area;
-    ``demo_world(seed)``: the closed-loop demo world. The acquisition crowd scenes
-    (``acquisition/crowd.py``) stage their crossings with these actors, textures and sensor model.
+    ``demo_world(seed)``: the closed-loop demo world.
+
+Crowd scenes (``crowd.py``, imported on its own: ``from swir_tracker_ros.scene import crowd``)
+    The acquisition tests' and benchmarks' thermal crowds, staged in image columns with these actors,
+    textures and sensor model, plus a detector stand-in; a fixture, not runtime acquisition code.
 """
 
 from __future__ import annotations
