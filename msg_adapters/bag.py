@@ -9,9 +9,8 @@ from typing import Any
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
+from msg_adapters.errors import MessageError
 from swir_tracker_ros.types import Box
-
-from .errors import MessageError
 
 IMAGE = "sensor_msgs/msg/Image"
 CAMERA_INFO = "sensor_msgs/msg/CameraInfo"

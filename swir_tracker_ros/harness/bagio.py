@@ -14,10 +14,9 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StorageP
 
 from msg_adapters import bag as mb
 from msg_adapters.errors import MessageError
-
-from ..errors import HarnessError
-from ..types import Box
-from .salvage import scan
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.salvage import scan
+from swir_tracker_ros.types import Box
 
 try:  # Python 3.14 ships compression.zstd; rosbags depends on the backport before that
     from compression import zstd  # type: ignore[import-not-found]

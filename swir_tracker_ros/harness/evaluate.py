@@ -11,11 +11,11 @@ from dataclasses import dataclass, field, fields, is_dataclass, replace
 
 import numpy as np
 
-from ..core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
-from ..errors import HarnessError, SwirTrackerError
-from ..types import Box, TrackState
-from .metrics import Score, mean_scores, score, sre_box
-from .sources import Source
+from swir_tracker_ros.core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
+from swir_tracker_ros.errors import HarnessError, SwirTrackerError
+from swir_tracker_ros.harness.metrics import Score, mean_scores, score, sre_box
+from swir_tracker_ros.harness.sources import Source
+from swir_tracker_ros.types import Box, TrackState
 
 SUMMARY_FIELDS = ("precision_20", "success_auc", "center_error", "lost_frames", "fps")
 
@@ -98,8 +98,8 @@ def tracker_params(variant: str, pipeline: str | None = None, overrides: Sequenc
     Validated; a bad name or value is a HarnessError."""
     import yaml
 
-    from ..errors import ParameterError
-    from ..tracker import TrackerParams
+    from swir_tracker_ros.errors import ParameterError
+    from swir_tracker_ros.tracker import TrackerParams
 
     kw = {"variant": variant} if pipeline is None else {"variant": variant, "pipeline": pipeline}
     try:
@@ -118,7 +118,7 @@ def tracker_params(variant: str, pipeline: str | None = None, overrides: Sequenc
 def make_tracker_factory(variant: str, pipeline: str | None = None,
                          overrides: Sequence[str] = ()) -> Callable[[], object]:
     """A zero-argument constructor of the core `Tracker` for one variant (`tracker_params`)."""
-    from ..tracker import Tracker
+    from swir_tracker_ros.tracker import Tracker
 
     params = tracker_params(variant, pipeline, overrides)
     return lambda: Tracker(deepcopy(params))

@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..types import Box
+from swir_tracker_ros.types import Box
 
 PRECISION_THRESHOLDS = np.arange(0, 51, dtype=np.float64)  # pixels, OTB default 0..50
 SUCCESS_THRESHOLDS = np.round(np.arange(0, 21) * 0.05, 2)  # IoU 0, 0.05, ..., 1 (21 values)

@@ -18,11 +18,10 @@ from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
 from std_msgs.msg import Bool
 
 from msg_adapters import bag as mb
-
-from ..errors import HarnessError
-from ..types import Box
-from .bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC, BagReader
-from .metrics import Score, score
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC, BagReader
+from swir_tracker_ros.harness.metrics import Score, score
+from swir_tracker_ros.types import Box
 
 RECORDED = {"/track/box": (PolygonStamped, mb.POLYGON_STAMPED),
             "/track/state": (DiagnosticArray, mb.DIAGNOSTIC_ARRAY),

@@ -60,9 +60,19 @@ Crowd scenes (``crowd.py``, imported on its own: ``from swir_tracker_ros.scene i
 
 from __future__ import annotations
 
-from .actors import Leg, Path, Pedestrian, StaticOccluder, Vehicle, bush, pole, tree, wall
-from .camera import CameraView
-from .scenarios import (
+from swir_tracker_ros.scene.actors import (
+    Leg,
+    Path,
+    Pedestrian,
+    StaticOccluder,
+    Vehicle,
+    bush,
+    pole,
+    tree,
+    wall,
+)
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.scenarios import (
     TARGET_ID,
     ScenarioRun,
     ScenarioSpec,
@@ -72,9 +82,9 @@ from .scenarios import (
     make_scenario,
     scenarios,
 )
-from .sensor import SensorModel
-from .texture import Look, Panorama, make_panorama
-from .world import Truth, World
+from swir_tracker_ros.scene.sensor import SensorModel
+from swir_tracker_ros.scene.texture import Look, Panorama, make_panorama
+from swir_tracker_ros.scene.world import Truth, World
 
 __all__ = [
     "TARGET_ID", "CameraView", "Leg", "Look", "Panorama", "Path", "Pedestrian", "ScenarioRun", "ScenarioSpec",

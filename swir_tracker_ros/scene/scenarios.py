@@ -9,11 +9,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .actors import Leg, Path, Pedestrian, Vehicle, bush, pole, tree, wall
-from .camera import CameraView
-from .sensor import SensorModel
-from .texture import Look, make_panorama
-from .world import Truth, World
+from swir_tracker_ros.scene.actors import Leg, Path, Pedestrian, Vehicle, bush, pole, tree, wall
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.sensor import SensorModel
+from swir_tracker_ros.scene.texture import Look, make_panorama
+from swir_tracker_ros.scene.world import Truth, World
 
 TARGET_ID = 1
 TILT = math.radians(-0.75)

@@ -10,11 +10,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..types import Box
-from .actors import Pedestrian, Placement, StaticOccluder, Vehicle
-from .camera import CameraView
-from .sensor import SensorModel, SensorPattern, apply_sensor, make_pattern, shake_offset
-from .texture import Panorama
+from swir_tracker_ros.scene.actors import Pedestrian, Placement, StaticOccluder, Vehicle
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.sensor import SensorModel, SensorPattern, apply_sensor, make_pattern, shake_offset
+from swir_tracker_ros.scene.texture import Panorama
+from swir_tracker_ros.types import Box
 
 Object = Pedestrian | Vehicle | StaticOccluder
 
