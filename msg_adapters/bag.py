@@ -132,16 +132,6 @@ def clock_msg(stamp_ns: int) -> Any:
     return typestore().types[CLOCK](clock=header(stamp_ns).stamp)
 
 
-def diagnostic_values(msg: Any, name: str = "swir_tracker/track") -> dict[str, str] | None:
-    """Key/values (plus 'message') of the status called `name` in a DiagnosticArray; None if absent."""
-    for st in msg.status:
-        if st.name == name:
-            out = {kv.key: kv.value for kv in st.values}
-            out.setdefault("message", st.message)
-            return out
-    return None
-
-
 def serialize(msg: Any) -> bytes:
     return bytes(typestore().serialize_cdr(msg, msg.__msgtype__))
 

@@ -42,11 +42,3 @@ def status_values(msg: DiagnosticArray, name: str) -> dict[str, str]:
         if st.name == name:
             return {kv.key: kv.value for kv in st.values}
     raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")
-
-
-def status_level(msg: DiagnosticArray, name: str) -> int:
-    """The level (0 OK .. 3 STALE) of the status called `name`."""
-    for st in getattr(msg, "status", []):
-        if st.name == name:
-            return st.level[0] if isinstance(st.level, bytes) else int(st.level)
-    raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")

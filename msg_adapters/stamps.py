@@ -35,8 +35,3 @@ def header(stamp: Time | float, frame_id: str = "") -> Header:
     if not isinstance(stamp, Time):
         stamp = seconds_to_stamp(float(stamp))
     return Header(stamp=stamp, frame_id=frame_id)
-
-
-def copy_header(src: Header) -> Header:
-    """An independent copy of a header (outputs are stamped with the input image's header)."""
-    return Header(stamp=Time(sec=src.stamp.sec, nanosec=src.stamp.nanosec), frame_id=src.frame_id)

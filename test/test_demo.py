@@ -15,10 +15,10 @@ from conftest import REPO, executable
 
 from swir_tracker_ros.demo.analysis import occlusion_episodes, series, summarise
 from swir_tracker_ros.demo.config import DemoParams, load_demo_params
-from swir_tracker_ros.demo.processes import DemoError
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
 from swir_tracker_ros.demo.run import pty_url
+from swir_tracker_ros.errors import DemoError
 
 CAM = {"width": 576, "height": 504, "fx": 4118.0, "fy": 4118.0, "cx": 288.0, "cy": 252.0}
 

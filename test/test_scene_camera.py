@@ -20,6 +20,7 @@ from swir_tracker_ros.demo.world import (
     initial_target_box,
     scene_names,
 )
+from swir_tracker_ros.errors import SceneError
 from swir_tracker_ros.scene.camera import CameraView
 
 
@@ -107,7 +108,7 @@ def test_scene_family_variants_are_harder_as_documented(demo_scene) -> None:
     again, _ = build_scene("demo_shake", 7).world.render(0.3, view)
     first, _ = shake.world.render(0.3, view)
     assert np.array_equal(again, first)
-    with pytest.raises(ValueError, match="unknown"):
+    with pytest.raises(SceneError, match="unknown"):
         from swir_tracker_ros.demo.world import demo_world
 
         demo_world(7, variant="nope")
@@ -120,7 +121,7 @@ def test_scene_clock_holds_until_started_and_at_the_end() -> None:
     assert clock.start(105.0) == 100.0  # idempotent
     assert clock.time(103.5) == pytest.approx(3.5)
     assert clock.time(200.0) == 10.0 and clock.finished(200.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(SceneError):
         SceneClock(0.0)
 
 
@@ -129,7 +130,7 @@ def test_build_scene_accepts_harness_scenarios_and_refuses_unknown_names() -> No
     assert names[0] == "demo" and set(VARIANTS) < set(names) and len(names) > len(VARIANTS) + 5
     other = build_scene(next(n for n in names if n not in VARIANTS), seed=1, bits=12, fps=25.0)
     assert other.duration_s > 0 and other.world.sensor.bits == 12
-    with pytest.raises(ValueError, match="unknown scene"):
+    with pytest.raises(SceneError, match="unknown scene"):
         build_scene("no_such_scene", seed=0)
 
 

@@ -12,7 +12,7 @@ from typing import Any
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from swir_tracker_ros.demo.processes import DemoError
+from swir_tracker_ros.errors import DemoError
 
 # Topics recorded into the bag and their ROS 2 types (docs/interfaces.md; /ground_truth/state: docs/demo.md).
 RECORDED_TOPICS: dict[str, str] = {

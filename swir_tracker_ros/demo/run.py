@@ -14,10 +14,11 @@ from pathlib import Path
 
 from swir_tracker_ros.demo.analysis import RunSummary, summarise
 from swir_tracker_ros.demo.config import DemoParams, dds_profile, load_demo_params, params_dir
-from swir_tracker_ros.demo.processes import DemoError, ProcessGroup, find_executable, ros_environment, tail
+from swir_tracker_ros.demo.processes import ProcessGroup, find_executable, ros_environment, tail
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
 from swir_tracker_ros.demo.world import VARIANTS, build_scene, target_visibility
+from swir_tracker_ros.errors import DemoError
 
 RUN_DIRS = {True: "ego_on", False: "ego_off"}
 

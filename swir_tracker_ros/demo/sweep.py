@@ -15,8 +15,8 @@ from pathlib import Path
 
 from swir_tracker_ros.demo.analysis import RunSummary
 from swir_tracker_ros.demo.config import load_demo_params
-from swir_tracker_ros.demo.processes import DemoError
 from swir_tracker_ros.demo.world import VARIANTS
+from swir_tracker_ros.errors import DemoError
 
 # A run succeeds when the target is in view at the end and for at least this share of the run, and the
 # tracker never reported `tracking` off the target (issue 13's "done when").
