@@ -194,6 +194,7 @@ def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str |
              overrides: Sequence[str] = ()) -> EvalResult:
     """Score every variant on every source (sequence names must be unique); rows in `reuse` are kept."""
     result = EvalResult()
+    factories: dict[str, Callable[[], object]] = {}  # one validated TrackerParams per variant, built once
     for src in sources:
         if src.name in result.sequences:
             raise HarnessError(f"two sources are both called {src.name!r}")
@@ -202,9 +203,9 @@ def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str |
             if reuse is not None and v in reuse.sequences.get(src.name, {}):
                 result.sequences[src.name][v] = reuse.sequences[src.name][v]
                 continue
-            factory = make_tracker_factory(v, pipeline, overrides) if overrides else \
-                make_tracker_factory(v, pipeline)  # (two-argument form: test doubles patch it)
-            run = run_source(src, factory)
+            if v not in factories:
+                factories[v] = make_tracker_factory(v, pipeline, overrides)
+            run = run_source(src, factories[v])
             s = run.score()
             result.sequences[src.name][v] = s
             if progress:
