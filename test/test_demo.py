@@ -107,7 +107,7 @@ def test_init_is_answered_by_tracking_after_the_first_init() -> None:
     """Init sent for the frame at 100.0 s, resent at 100.5 and 101.0 (the tracker had not answered yet):
     a `tracking` state for the frame at 100.2 answers it (the old rule compared with the last resend and
     waited on, while the head already followed the track)."""
-    from swir_tracker_ros.nodes.demo_supervisor_node import init_answered
+    from swir_tracker_ros.demo.supervisor_node import init_answered
 
     assert init_answered(100.0, "tracking", 100.2)
     assert not init_answered(100.0, "tracking", 99.96)  # a state from before the init

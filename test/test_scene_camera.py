@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 from conftest import wait_for
 
-from swir_tracker_ros.demo.world import (
+from swir_tracker_ros.errors import SceneError
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_scene import (
     DEMO_DURATION_S,
     TARGET_ID,
     VARIANTS,
@@ -20,8 +22,6 @@ from swir_tracker_ros.demo.world import (
     initial_target_box,
     scene_names,
 )
-from swir_tracker_ros.errors import SceneError
-from swir_tracker_ros.scene.camera import CameraView
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +58,7 @@ def test_demo_scene_hides_the_target_while_it_stops(demo_scene) -> None:
 
 
 def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> None:
-    from swir_tracker_ros.demo.world import target_visibility
+    from swir_tracker_ros.scene.demo_scene import target_visibility
 
     vis = target_visibility(demo_scene, [0.5, 9.5, 13.0])
     assert vis[0] > 0.9 and vis[1] < 0.05 and vis[2] > 0.9
@@ -66,7 +66,7 @@ def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> 
 
 def _hidden_runs(scene, step: float = 0.1) -> list[tuple[float, float]]:
     """Scene-time runs (start, end) with less than half of the target visible."""
-    from swir_tracker_ros.demo.world import target_visibility
+    from swir_tracker_ros.scene.demo_scene import target_visibility
 
     ts = np.arange(0.0, DEMO_DURATION_S, step)
     runs: list[list[float]] = []
@@ -109,7 +109,7 @@ def test_scene_family_variants_are_harder_as_documented(demo_scene) -> None:
     first, _ = shake.world.render(0.3, view)
     assert np.array_equal(again, first)
     with pytest.raises(SceneError, match="unknown"):
-        from swir_tracker_ros.demo.world import demo_world
+        from swir_tracker_ros.scene.demo_scene import demo_world
 
         demo_world(7, variant="nope")
 
@@ -139,7 +139,7 @@ def test_ground_truth_state_round_trip_and_camera_info() -> None:
     from msg_adapters.errors import MessageError
     from msg_adapters.ground_truth import ground_truth_state_msg, ground_truth_state_values
     from msg_adapters.stamps import header
-    from swir_tracker_ros.nodes.scene_camera_node import camera_info_msg, ground_truth_values
+    from swir_tracker_ros.simulation.scene_camera_node import camera_info_msg, ground_truth_values
 
     scene = build_scene("demo", seed=7)
     view = CameraView(0.01, -0.005, 8.0, 576, 504)

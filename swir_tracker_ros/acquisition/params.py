@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+from swir_tracker_ros import topics
 from swir_tracker_ros.acquisition.detectors import (
     Detector,
     HogParams,
@@ -23,8 +24,8 @@ DETECTORS = ("motion", "hog")
 class AcquisitionParams:
     """Topics, detector choice, hand-off behaviour and the detectors' settings."""
 
-    image_topic: str = _f("/camera/image_raw", "input sensor_msgs/Image topic", read_only=True)
-    joint_states_topic: str = _f("/positioner/joint_states", "head joint states for ego-motion",
+    image_topic: str = _f(topics.IMAGE, "input sensor_msgs/Image topic", read_only=True)
+    joint_states_topic: str = _f(topics.JOINT_STATES, "head joint states for ego-motion",
                                  read_only=True)
     detector: str = _f("motion", "detector: motion (background subtraction) or hog (OpenCV people)",
                        choices=DETECTORS)

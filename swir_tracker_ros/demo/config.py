@@ -10,8 +10,8 @@ from pathlib import Path
 
 import yaml
 
-from swir_tracker_ros.demo.world import scene_names
 from swir_tracker_ros.errors import DemoError
+from swir_tracker_ros.scene.demo_scene import scene_names
 
 PACKAGE = "swir_tracker_ros"
 

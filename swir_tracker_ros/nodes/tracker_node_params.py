@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
 
 
@@ -17,11 +18,11 @@ from swir_tracker_ros.errors import ParameterError
 class TrackerNodeParams:
     """Node-only parameters (the tracking core's own parameters are bound under `tracker.`)."""
 
-    image_topic: str = field(default="/camera/image_raw", metadata={
+    image_topic: str = field(default=topics.IMAGE, metadata={
         "doc": "Input sensor_msgs/Image topic (sensor-data QoS, depth 1).", "read_only": True})
-    camera_info_topic: str = field(default="/camera/camera_info", metadata={
+    camera_info_topic: str = field(default=topics.CAMERA_INFO, metadata={
         "doc": "Optional sensor_msgs/CameraInfo topic; its K gives the focal lengths.", "read_only": True})
-    joint_states_topic: str = field(default="/positioner/joint_states", metadata={
+    joint_states_topic: str = field(default=topics.JOINT_STATES, metadata={
         "doc": "sensor_msgs/JointState of the head (joints pan, tilt in rad) for ego-motion.",
         "read_only": True})
     use_camera_info: bool = field(default=True, metadata={

@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image, JointState
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
@@ -20,22 +19,21 @@ from msg_adapters import diagnostics
 from msg_adapters.camera_info import Intrinsics, camera_info_from_intrinsics
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_polygon
-from msg_adapters.ground_truth import ground_truth_state_msg
+from msg_adapters.ground_truth import ground_truth_state_msg, scene_start_reply
 from msg_adapters.image import numpy_to_image
 from msg_adapters.joint_state import joint_state_to_sample
+from msg_adapters.qos import profile
 from msg_adapters.stamps import header as make_header
-from swir_tracker_ros.demo.world import SceneClock, build_scene, scene_names
+from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import input_publishers
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_scene import SceneClock, build_scene, scene_names
 from swir_tracker_ros.scene.world import Truth
 
-CAMERA_QOS = QoSProfile(depth=2, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
-GROUND_TRUTH_STATE = "/ground_truth/state"
 STATUS_NAME = "swir_tracker/scene_camera"
-JOINT_STATES_TOPIC = "/positioner/joint_states"
 
 
 @dataclass
@@ -120,13 +118,14 @@ class SceneCameraNode(Node):
         self.frames = 0
         # Reliable, shallow: sensor-data (best-effort) subscribers such as the tracker match it and get the
         # newest frame; a reliable recorder gets every frame, lost fragments of the large image re-sent.
-        self.image_pub = self.create_publisher(Image, "/camera/image_raw", CAMERA_QOS)
-        self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", CAMERA_QOS)
-        self.gt_pub = self.create_publisher(PolygonStamped, "/ground_truth/box", QoSProfile(depth=10))
-        self.gt_state_pub = self.create_publisher(DiagnosticArray, GROUND_TRUTH_STATE, QoSProfile(depth=10))
-        self.create_subscription(JointState, JOINT_STATES_TOPIC, self._on_joints, 10)
-        self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self.create_service(Trigger, "/scene/start", self._on_start)
+        camera, reliable = profile(topics.CAMERA), profile(topics.RELIABLE)
+        self.image_pub = self.create_publisher(Image, topics.IMAGE, camera)
+        self.info_pub = self.create_publisher(CameraInfo, topics.CAMERA_INFO, camera)
+        self.gt_pub = self.create_publisher(PolygonStamped, topics.GROUND_TRUTH_BOX, reliable)
+        self.gt_state_pub = self.create_publisher(DiagnosticArray, topics.GROUND_TRUTH_STATE, reliable)
+        self.create_subscription(JointState, topics.JOINT_STATES, self._on_joints, reliable)
+        self.diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, reliable)
+        self.create_service(Trigger, topics.SCENE_START, self._on_start)
         self.timer = self.create_timer(1.0 / p.fps, self._tick)
         self.create_timer(1.0, self._publish_diagnostics)
         self.get_logger().info(
@@ -138,7 +137,7 @@ class SceneCameraNode(Node):
         try:
             s = joint_state_to_sample(msg)
         except MessageError as exc:
-            self.get_logger().warning(f"/positioner/joint_states: {exc}", throttle_duration_sec=5.0)
+            self.get_logger().warning(f"{topics.JOINT_STATES}: {exc}", throttle_duration_sec=5.0)
             return
         now = time.time()
         measured = s.stamp if 0.0 < s.stamp <= now else now  # the bridge stamps the measurement time
@@ -152,20 +151,18 @@ class SceneCameraNode(Node):
         age = now - self.pose[4]
         values = {"frames": self.frames, "scene_time": self.clock.time(now), "running": self.clock.running,
                   "head_pose_age_s": age if math.isfinite(age) else "never",
-                  **input_publishers(self, (JOINT_STATES_TOPIC,))}
+                  **input_publishers(self, (topics.JOINT_STATES,))}
         if math.isfinite(age) and age <= 1.0:
             level, text = diagnostics.OK, "rendering at the head pose"
         else:
-            level, text = diagnostics.WARN, f"no {JOINT_STATES_TOPIC} for 1 s: last known pose held"
+            level, text = diagnostics.WARN, f"no {topics.JOINT_STATES} for 1 s: last known pose held"
         st = diagnostics.status(STATUS_NAME, level, text, values, hardware_id="scene_camera")
         self.diag_pub.publish(diagnostics.diagnostic_array(make_header(now, self.p.frame_id), [st]))
 
     def _on_start(self, _req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
         started = self.clock.start(time.time())
-        resp.success = True
-        resp.message = f"scene clock started at {started:.6f}"
-        self.get_logger().info(resp.message)
-        return resp
+        self.get_logger().info(f"scene clock started at {started:.6f}")
+        return scene_start_reply(resp, started)
 
     def head_view(self, now: float) -> CameraView:
         """The view at `now`: the last joint state moved on by its velocity for at most extrapolate_s.
