@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import yaml
 
-from swir_tracker_ros.errors import DemoError
+from swir_tracker_ros.errors import DemoError, ParameterError
+from swir_tracker_ros.paramfield import param, validate_params
 from swir_tracker_ros.scene.demo_scene import scene_names
 
 PACKAGE = "swir_tracker_ros"
@@ -20,48 +21,46 @@ PACKAGE = "swir_tracker_ros"
 class DemoParams:
     """What `demo` runs; the node parameters themselves come from params/<node>.yaml."""
 
-    scene: str = field(default="demo", metadata={"doc": "scene rendered by scene_camera (see scene_names())"})
-    seed: int = field(default=7, metadata={"doc": "scene seed", "min": 0, "max": 2**31 - 1})
-    duration_s: float = field(default=30.0, metadata={"doc": "seconds of scene recorded per run",
-                                                      "min": 1.0, "max": 600.0})
-    storage: str = field(default="mcap", metadata={"doc": "rosbag2 storage", "choices": ("mcap", "sqlite3")})
-    bag_images: bool = field(default=False, metadata={
-        "doc": "record /camera/image_raw in the bag (~14 MB/s; the debug video carries the pictures)"})
-    snapshots: list[float] = field(default_factory=lambda: [2.0, 8.0, 16.0, 24.0], metadata={
-        "doc": "scene times (s) at which a debug frame is saved as PNG"})
-    startup_timeout_s: float = field(default=60.0, metadata={
-        "doc": "how long the processes may take to come up before the run is abandoned", "min": 5.0,
-        "max": 600.0})
-    sim_nice: int = field(default=0, metadata={
-        "doc": "niceness added to the simulation-only processes (scene_camera's renderer and the recording "
-               "demo_supervisor), process and session (autogroup); 0: none. A lower weight lets the tracker "
-               "have the CPU first, but on a loaded machine the simulated camera then misses its 25 Hz "
-               "(16-22 frames/s measured, 3-5 during a start-up), which a real camera never does",
-        "min": 0, "max": 19})
-    pelco_sim_args: list[str] = field(default_factory=list, metadata={
-        "doc": "extra pelco_sim command-line arguments (speed table, latency, faults)"})
-    positioner_overrides: dict[str, object] = field(default_factory=dict, metadata={
-        "doc": "positioner_bridge parameters set on top of params/positioner.yaml"})
-    tracker_overrides: dict[str, object] = field(default_factory=dict, metadata={
-        "doc": "tracker parameters set on top of params/tracker.yaml (core ones as tracker.<name>)"})
-    scene_camera_overrides: dict[str, object] = field(default_factory=dict, metadata={
-        "doc": "scene_camera parameters set on top of params/scene_camera.yaml"})
+    scene: str = param("demo", "scene rendered by scene_camera (see scene_names())")
+    seed: int = param(7, "scene seed", 0, 2**31 - 1)
+    duration_s: float = param(30.0, "seconds of scene recorded per run", 1.0, 600.0)
+    storage: str = param("mcap", "rosbag2 storage", choices=("mcap", "sqlite3"))
+    bag_images: bool = param(
+        False, "record /camera/image_raw in the bag (~14 MB/s; the debug video carries the pictures)")
+    snapshots: list[float] = param(
+        [2.0, 8.0, 16.0, 24.0], "scene times (s) at which a debug frame is saved as PNG")
+    startup_timeout_s: float = param(
+        60.0, "how long the processes may take to come up before the run is abandoned", 5.0, 600.0)
+    sim_nice: int = param(
+        0, "niceness added to the simulation-only processes (scene_camera's renderer and the recording "
+        "demo_supervisor), process and session (autogroup); 0: none. A lower weight lets the tracker have "
+        "the CPU first, but on a loaded machine the simulated camera then misses its 25 Hz (16-22 frames/s "
+        "measured, 3-5 during a start-up), which a real camera never does", 0, 19)
+    pelco_sim_args: list[str] = param(
+        [], "extra pelco_sim command-line arguments (speed table, latency, faults)")
+    positioner_overrides: dict[str, object] = param(
+        {}, "positioner_bridge parameters set on top of params/positioner.yaml")
+    tracker_overrides: dict[str, object] = param(
+        {}, "tracker parameters set on top of params/tracker.yaml (core ones as tracker.<name>)")
+    scene_camera_overrides: dict[str, object] = param(
+        {}, "scene_camera parameters set on top of params/scene_camera.yaml")
 
     def validate(self) -> DemoParams:
+        """Raise `DemoError` naming the first bad field (`paramfield.validate_params`); returns self."""
+        try:
+            validate_params(self)
+        except ParameterError as exc:
+            raise DemoError(f"demo {exc}") from None
+        return self
+
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
         if self.scene not in scene_names():
-            raise DemoError(f"demo parameter scene = {self.scene!r} is not one of {scene_names()}")
+            raise ParameterError(f"parameter scene = {self.scene!r} is not one of {scene_names()}")
         for name in ("positioner_overrides", "tracker_overrides", "scene_camera_overrides"):
             value = getattr(self, name)
             if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
-                raise DemoError(f"demo parameter {name} must map parameter names to values, got {value!r}")
-        for f in dataclasses.fields(self):
-            value, meta = getattr(self, f.name), f.metadata
-            if "min" in meta and not meta["min"] <= value <= meta["max"]:
-                raise DemoError(f"demo parameter {f.name} = {value!r} is outside "
-                                f"[{meta['min']}, {meta['max']}]")
-            if "choices" in meta and value not in meta["choices"]:
-                raise DemoError(f"demo parameter {f.name} = {value!r} is not one of {list(meta['choices'])}")
-        return self
+                raise ParameterError(f"parameter {name} must map parameter names to values, got {value!r}")
 
     def with_duration(self, seconds: float) -> DemoParams:
         return dataclasses.replace(self, duration_s=float(seconds)).validate()

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped
@@ -29,6 +29,7 @@ from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import input_publishers
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
+from swir_tracker_ros.paramfield import param, validate_params
 from swir_tracker_ros.scene.camera import CameraView
 from swir_tracker_ros.scene.demo_scene import SceneClock, build_scene, scene_names
 from swir_tracker_ros.scene.world import Truth
@@ -40,39 +41,37 @@ STATUS_NAME = "swir_tracker/scene_camera"
 class SceneCameraParams:
     """Parameters of the `scene_camera` node (params/scene_camera.yaml)."""
 
-    scene: str = field(default="demo", metadata={
-        "doc": "world to render: 'demo' (the closed-loop demo scene) or a harness scenario name"})
-    seed: int = field(default=7, metadata={"doc": "scene seed (same seed, same scene)", "min": 0,
-                                           "max": 2**31 - 1})
-    width: int = field(default=576, metadata={"doc": "image width, pixels", "min": 16, "max": 4096})
-    height: int = field(default=504, metadata={"doc": "image height, pixels", "min": 16, "max": 4096})
-    fps: float = field(default=25.0, metadata={"doc": "frame rate, Hz", "min": 1.0, "max": 200.0})
-    hfov_deg: float = field(default=8.0, metadata={"doc": "horizontal field of view, degrees (square pixels)",
-                                                   "min": 0.5, "max": 120.0})
-    bits: int = field(default=16, metadata={"doc": "sensor bit depth; 8 publishes mono8, else mono16",
-                                            "choices": (8, 10, 12, 14, 16)})
-    autostart: bool = field(default=True, metadata={
-        "doc": "start the scene clock with the first frame; false: hold t = 0 until /scene/start is called"})
-    duration_s: float = field(default=0.0, metadata={
-        "doc": "scene length, s; the clock holds at the end (0: the scene's own length)", "min": 0.0,
-        "max": 3600.0})
-    target_id: int = field(default=1, metadata={"doc": "identity of the pedestrian on /ground_truth/*",
-                                                "min": 0, "max": 1_000_000})
-    frame_id: str = field(default="camera_optical_frame", metadata={"doc": "header frame_id of the outputs"})
-    initial_pan_deg: float = field(default=0.0, metadata={"doc": "pan used until the first joint state, deg",
-                                                          "min": -360.0, "max": 360.0})
-    initial_tilt_deg: float = field(default=0.0, metadata={
-        "doc": "tilt used until the first joint state, deg", "min": -90.0, "max": 90.0})
-    extrapolate_s: float = field(default=0.3, metadata={
-        "doc": "extrapolate the last joint state (from its header stamp) with its velocity up to this "
-               "age, s (0: hold)", "min": 0.0, "max": 2.0})
+    scene: str = param(
+        "demo", "world to render: 'demo' (the closed-loop demo scene) or a harness scenario name")
+    seed: int = param(7, "scene seed (same seed, same scene)", 0, 2**31 - 1)
+    width: int = param(576, "image width, pixels", 16, 4096)
+    height: int = param(504, "image height, pixels", 16, 4096)
+    fps: float = param(25.0, "frame rate, Hz", 1.0, 200.0)
+    hfov_deg: float = param(8.0, "horizontal field of view, degrees (square pixels)", 0.5, 120.0)
+    bits: int = param(16, "sensor bit depth; 8 publishes mono8, else mono16", choices=(8, 10, 12, 14, 16))
+    autostart: bool = param(
+        True, "start the scene clock with the first frame; false: hold t = 0 until /scene/start is called")
+    duration_s: float = param(
+        0.0, "scene length, s; the clock holds at the end (0: the scene's own length)", 0.0, 3600.0)
+    target_id: int = param(1, "identity of the pedestrian on /ground_truth/*", 0, 1_000_000)
+    frame_id: str = param("camera_optical_frame", "header frame_id of the outputs")
+    initial_pan_deg: float = param(0.0, "pan used until the first joint state, deg", -360.0, 360.0)
+    initial_tilt_deg: float = param(0.0, "tilt used until the first joint state, deg", -90.0, 90.0)
+    extrapolate_s: float = param(
+        0.3, "extrapolate the last joint state (from its header stamp) with its velocity up to this age, s "
+        "(0: hold)", 0.0, 2.0)
 
     def validate(self) -> SceneCameraParams:
+        """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`); returns self."""
+        validate_params(self)
+        return self
+
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
         if self.scene not in scene_names():
             raise ParameterError(f"parameter scene = {self.scene!r} is not one of {scene_names()}")
         if self.width % 2 or self.height % 2:
             raise ParameterError(f"width x height must be even, got {self.width}x{self.height}")
-        return self
 
 
 def ground_truth_values(scene_time: float, truth: Truth | None, view: CameraView,
