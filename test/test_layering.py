@@ -32,6 +32,9 @@ ALLOWED: dict[str, set[str]] = {
     "harness": BASE | {"kalman", "core", "tracker", "scene", "msg_adapters"},
     "demo": BASE | {"scene", "simulation", "nodes", "msg_adapters", "harness"},
 }
+# The params-file generator (`python -m swir_tracker_ros.param_files`) reads every layer's params; no
+# layer imports it (it is in no ALLOWED set above).
+ALLOWED["param_files"] = set(ALLOWED) - {"param_files"}
 ROS_FREE = BASE | PRODUCT | {"scene"}
 ROS_MODULES = {"rclpy", "rosidl_runtime_py", "builtin_interfaces", "std_msgs", "sensor_msgs", "geometry_msgs",
                "diagnostic_msgs", "std_srvs", "visualization_msgs", "rosgraph_msgs"}

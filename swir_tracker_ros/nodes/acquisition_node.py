@@ -33,12 +33,22 @@ from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
 from swir_tracker_ros.acquisition.params import AcquisitionParams
 from swir_tracker_ros.errors import AcquisitionError, ParameterError
 from swir_tracker_ros.nodes.graph import check_topic_names
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.types import Box, TrackState
 
 NODE_NAME = "acquisition"
 MOT_PREFIX = "mot."
+
+
+PARAMS_FILE = ParamsFile(
+    "params/acquisition.yaml", "acquisition",
+    (("", AcquisitionParams, ""),
+     ("mot", MotParams, "association and life cycle (MotParams), declared as mot.<name>")),
+    "Parameters of the acquisition node (`acquisition`, docs/acquisition.md), every one at its default. "
+    + GENERATED + " swir_tracker_ros/acquisition/params.py and mot.py, not this file. Pixel values refer "
+    "to full-resolution image pixels.")
 
 
 class AcquisitionNode(Node):

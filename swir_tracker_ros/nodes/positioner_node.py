@@ -21,7 +21,7 @@ from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError, PelcoError
 from swir_tracker_ros.nodes.graph import input_publishers
-from swir_tracker_ros.nodes.param_docs import usage_lines
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.pelco.bridge import PositionerBridge
@@ -117,6 +117,13 @@ def _stop_head(node: PositionerNode) -> None:
     sent = node.bridge.shutdown()
     print(f"positioner_bridge: stop {'written' if sent else 'NOT written (port unavailable)'} "
           "before closing the port", file=sys.stderr, flush=True)
+
+
+PARAMS_FILE = ParamsFile(
+    "params/positioner.yaml", "positioner_bridge", (("", PositionerParams, ""),),
+    "Parameters of the positioner bridge (`positioner_bridge`; docs/positioner.md: wiring and sign "
+    "conventions), every one at its default. " + GENERATED + " swir_tracker_ros/pelco/params.py, not this "
+    "file. Units: rad, rad/s, s, Hz, deg/s in the speed tables.")
 
 
 def usage() -> str:

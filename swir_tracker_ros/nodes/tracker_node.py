@@ -5,9 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-import textwrap
 import time
-import typing
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -31,7 +29,8 @@ from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
-from swir_tracker_ros.nodes.param_docs import usage_lines
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
+from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node, user_arguments
 from swir_tracker_ros.nodes.tracker_node_params import (
@@ -360,47 +359,19 @@ def usage() -> str:
     return "\n".join(lines)
 
 
-def _yaml_value(value: object) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, list):
-        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
-    return repr(value)
-
-
-def _yaml_fields(cls: type, indent: int) -> list[str]:
-    """Documented `name: default` lines of a params dataclass; a nested dataclass becomes a YAML block."""
-    lines: list[str] = []
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        meta = f.metadata
-        doc = str(meta.get("doc", ""))
-        if dataclasses.is_dataclass(hints[f.name]):
-            lines.append(" " * indent + f"{f.name}:  # {doc}")
-            lines += _yaml_fields(hints[f.name], indent + 2)
-            continue
-        if "choices" in meta:
-            doc += f" {{{', '.join(map(str, meta['choices']))}}}"
-        elif "min" in meta or "max" in meta:
-            doc += f" [{meta.get('min', '-inf')}, {meta.get('max', 'inf')}]"
-        lines += [" " * indent + "# " + part for part in textwrap.wrap(doc, 104 - indent)]
-        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        lines.append(" " * indent + f"{f.name}: {_yaml_value(default)}")
-    return lines
+PARAMS_FILE = ParamsFile(
+    "params/tracker.yaml", "/**",
+    (("", TrackerNodeParams, ""),
+     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
+    "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
+    + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
+    "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "
+    "Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml")
 
 
 def params_yaml() -> str:
     """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
-    lines = ["# Parameters of the `tracker` node (docs/tracker_node.md); `tracker --params-yaml` regenerates",
-             "# this file with the defaults. Ranges are enforced; invalid runtime changes are rejected.",
-             "# Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml",
-             "/**:", "  ros__parameters:"]
-    lines += _yaml_fields(TrackerNodeParams, 4)
-    lines.append("    tracker:  # the tracking core (swir_tracker_ros.tracker.TrackerParams)")
-    lines += _yaml_fields(TrackerParams, 6)
-    return "\n".join(lines) + "\n"
+    return render_params_file(PARAMS_FILE)
 
 
 def main(argv: list[str] | None = None) -> int:

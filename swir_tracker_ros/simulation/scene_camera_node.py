@@ -27,6 +27,7 @@ from msg_adapters.stamps import header as make_header
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import input_publishers
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.paramfield import param, validate_params
@@ -72,6 +73,14 @@ class SceneCameraParams:
             raise ParameterError(f"parameter scene = {self.scene!r} is not one of {scene_names()}")
         if self.width % 2 or self.height % 2:
             raise ParameterError(f"width x height must be even, got {self.width}x{self.height}")
+
+
+PARAMS_FILE = ParamsFile(
+    "params/scene_camera.yaml", "/**", (("", SceneCameraParams, ""),),
+    "Parameters of the `scene_camera` node (docs/demo.md), a simulated SWIR camera on the pan-tilt head, "
+    "every one at its default. " + GENERATED + " swir_tracker_ros/simulation/scene_camera_node.py, not "
+    "this file. Use: ros2 run swir_tracker_ros scene_camera --ros-args --params-file "
+    "params/scene_camera.yaml")
 
 
 def ground_truth_values(scene_time: float, truth: Truth | None, view: CameraView,
