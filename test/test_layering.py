@@ -28,7 +28,9 @@ ALLOWED: dict[str, set[str]] = {
     "scene": BASE | {"acquisition"},  # scene.crowd hands out acquisition Detections (simulation -> core)
     "msg_adapters": {"types", "topics"},  # one way: the adapters know the public value types, not the reverse
     "nodes": BASE | PRODUCT | {"msg_adapters"},
-    "simulation": BASE | {"scene", "msg_adapters", "nodes"},  # nodes: the node toolkit (runner, parameters)
+    # the simulated camera and head; nodes: the node toolkit (runner, parameters); pelco: the simulated head
+    # speaks the protocol of pelco/
+    "simulation": BASE | {"scene", "msg_adapters", "nodes", "pelco"},
     "harness": BASE | {"kalman", "core", "tracker", "scene", "msg_adapters"},
     "demo": BASE | {"scene", "simulation", "nodes", "msg_adapters", "harness"},
 }
