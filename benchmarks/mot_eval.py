@@ -31,7 +31,6 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from swir_tracker_ros.acquisition import crowd  # noqa: E402
 from swir_tracker_ros.acquisition.association import Detection  # noqa: E402
 from swir_tracker_ros.acquisition.detectors import (  # noqa: E402
     Detector,
@@ -41,6 +40,7 @@ from swir_tracker_ros.acquisition.detectors import (  # noqa: E402
 )
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker, TrackStatus  # noqa: E402
 from swir_tracker_ros.acquisition.siamese import SiameseFamily  # noqa: E402
+from swir_tracker_ros.scene import crowd  # noqa: E402
 from swir_tracker_ros.types import Box  # noqa: E402
 
 SHARED = REPO.parent / "shared"

@@ -34,14 +34,15 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Image, RegionOfInterest
 
 from msg_adapters.diagnostics import status_values
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_from_polygon
 from msg_adapters.image import numpy_to_image
+from msg_adapters.qos import profile
 from msg_adapters.stamps import header, seconds_to_stamp, stamp_to_seconds
+from swir_tracker_ros import topics
 from swir_tracker_ros.nodes.tracker_node import DIAG_NAME
 
 REPO = Path(__file__).resolve().parent.parent
@@ -82,15 +83,15 @@ class SyntheticSequence:
 class Bench(Node):
     def __init__(self) -> None:
         super().__init__("node_latency_bench")
-        self.pub = self.create_publisher(Image, "/camera/image_raw",
-                                         QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
-        self.init = self.create_publisher(RegionOfInterest, "/track/init", 10)
+        self.pub = self.create_publisher(Image, topics.IMAGE, profile(topics.LATEST))
+        self.init = self.create_publisher(RegionOfInterest, topics.TRACK_INIT, profile(topics.RELIABLE))
         self.latency: dict[float, float] = {}
         self.boxes: dict[float, PolygonStamped] = {}
         self.diags: list[dict[str, str]] = []
-        self.create_subscription(Vector3Stamped, "/track/pan_tilt_error", self._on_error, 50)
-        self.create_subscription(PolygonStamped, "/track/box", self._on_box, 50)
-        self.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
+        record, reliable = profile(topics.RECORD), profile(topics.RELIABLE)
+        self.create_subscription(Vector3Stamped, topics.PAN_TILT_ERROR, self._on_error, record)
+        self.create_subscription(PolygonStamped, topics.TRACK_BOX, self._on_box, record)
+        self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_diag, reliable)
 
     def _on_error(self, msg: Vector3Stamped) -> None:
         stamp = stamp_to_seconds(msg.header.stamp)

@@ -43,7 +43,7 @@ def _graph(context, *_args, **_kwargs):
     port = arg["sim_link"] if _truthy(arg["sim_head"]) else arg["port"]
     tracker_overrides = {"ego_motion_compensation": _truthy(arg["ego_motion_compensation"])}
     if _truthy(arg["init_from_scene"]):
-        from swir_tracker_ros.demo.world import initial_target_box
+        from swir_tracker_ros.scene.demo_scene import initial_target_box
 
         tracker_overrides["init_box"] = initial_target_box(arg["scene"], int(arg["seed"]))
     pelco_sim = os.path.join(get_package_prefix(PACKAGE), "lib", PACKAGE, "pelco_sim")  # not a ROS node

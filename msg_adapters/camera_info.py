@@ -6,11 +6,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from sensor_msgs.msg import CameraInfo, RegionOfInterest
-from std_msgs.msg import Header
-
+from msg_adapters.backend import CAMERA_INFO, HEADER, RCLPY, ROI, TIME, Backend
 from msg_adapters.errors import MessageError
+
+if TYPE_CHECKING:
+    from sensor_msgs.msg import CameraInfo
+    from std_msgs.msg import Header
 
 
 @dataclass(frozen=True)
@@ -50,6 +53,16 @@ def intrinsics_from_fov(width: int, height: int, hfov_deg: float, vfov_deg: floa
     return Intrinsics(fx, fy, width / 2.0, height / 2.0, int(width), int(height))
 
 
+def intrinsics_from_matrix(k: Sequence[float], width: int, height: int) -> Intrinsics:
+    """Intrinsics of a row-major 3x3 camera matrix K = [fx 0 cx; 0 fy cy; 0 0 1] (no skew)."""
+    if len(k) != 9:
+        raise MessageError(f"camera matrix K needs 9 values, got {len(k)}")
+    kk = [float(v) for v in k]
+    if (kk[1], kk[3], kk[6], kk[7], kk[8]) != (0.0, 0.0, 0.0, 0.0, 1.0):
+        raise MessageError(f"camera matrix K must be [fx 0 cx; 0 fy cy; 0 0 1], got {kk}")
+    return Intrinsics(kk[0], kk[4], kk[2], kk[5], int(width), int(height))
+
+
 def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
     """fx, fy, cx, cy from `CameraInfo.k`, corrected for `binning_x/y` and `roi` (REP-104).
 
@@ -87,7 +100,7 @@ def camera_info_from_intrinsics(intr: Intrinsics, header: Header | None = None, 
                                 binning: tuple[int, int] = (1, 1), roi_offset: tuple[int, int] = (0, 0),
                                 sensor_size: tuple[int, int] | None = None,
                                 distortion_model: str = "plumb_bob",
-                                d: Sequence[float] = (0.0,) * 5) -> CameraInfo:
+                                d: Sequence[float] = (0.0,) * 5, backend: Backend = RCLPY) -> CameraInfo:
     """The CameraInfo of an image with intrinsics `intr`: the inverse of `intrinsics_from_camera_info`.
 
     REP-104: the message describes the full sensor (`sensor_size`, default: exactly the ROI) with
@@ -108,13 +121,15 @@ def camera_info_from_intrinsics(intr: Intrinsics, header: Header | None = None, 
     full_w, full_h = (int(v) for v in sensor_size) if sensor_size is not None else (x0 + roi_w, y0 + roi_h)
     if x0 + roi_w > full_w or y0 + roi_h > full_h:
         raise MessageError(f"ROI {roi_w}x{roi_h} at ({x0}, {y0}) exceeds the {full_w}x{full_h} sensor")
-    roi = RegionOfInterest()  # all zero: the whole sensor
-    if (x0, y0, roi_w, roi_h) != (0, 0, full_w, full_h):
-        roi = RegionOfInterest(x_offset=x0, y_offset=y0, width=roi_w, height=roi_h)
+    whole = (x0, y0, roi_w, roi_h) == (0, 0, full_w, full_h)  # written as the all-zero ROI
+    roi = backend.cls(ROI)(x_offset=0 if whole else x0, y_offset=0 if whole else y0,
+                           width=0 if whole else roi_w, height=0 if whole else roi_h, do_rectify=False)
+    if header is None:
+        header = backend.cls(HEADER)(stamp=backend.cls(TIME)(sec=0, nanosec=0), frame_id="")
     fx, fy, cx, cy = intr.fx * bx, intr.fy * by, intr.cx * bx + x0, intr.cy * by + y0
-    return CameraInfo(header=header if header is not None else Header(), width=full_w, height=full_h,
-                      distortion_model=distortion_model, d=[float(v) for v in d],
-                      k=[fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0],
-                      r=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-                      p=[fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0],
-                      binning_x=bx if bx > 1 else 0, binning_y=by if by > 1 else 0, roi=roi)
+    return backend.cls(CAMERA_INFO)(
+        header=header, width=full_w, height=full_h, distortion_model=distortion_model, d=backend.f64(d),
+        k=backend.f64([fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]),
+        r=backend.f64([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]),
+        p=backend.f64([fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        binning_x=bx if bx > 1 else 0, binning_y=by if by > 1 else 0, roi=roi)

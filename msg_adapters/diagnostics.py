@@ -36,17 +36,17 @@ def diagnostic_array(header: Header, statuses: list[DiagnosticStatus]) -> Diagno
     return DiagnosticArray(header=header, status=list(statuses))
 
 
+def statuses(msg: DiagnosticArray) -> list[tuple[str, dict[str, str]]]:
+    """(name, values) of every status in the array, in message order."""
+    try:
+        return [(str(st.name), {str(kv.key): str(kv.value) for kv in st.values}) for st in msg.status]
+    except (AttributeError, TypeError) as exc:
+        raise MessageError(f"DiagnosticArray.status is not readable ({exc})") from exc
+
+
 def status_values(msg: DiagnosticArray, name: str) -> dict[str, str]:
     """The values of the status called `name`; `MessageError` if the array has no such status."""
-    for st in getattr(msg, "status", []):
-        if st.name == name:
-            return {kv.key: kv.value for kv in st.values}
-    raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")
-
-
-def status_level(msg: DiagnosticArray, name: str) -> int:
-    """The level (0 OK .. 3 STALE) of the status called `name`."""
-    for st in getattr(msg, "status", []):
-        if st.name == name:
-            return st.level[0] if isinstance(st.level, bytes) else int(st.level)
+    for st_name, values in statuses(msg):
+        if st_name == name:
+            return values
     raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")

@@ -4,25 +4,37 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-from geometry_msgs.msg import Point32, PolygonStamped, Vector3, Vector3Stamped
-from sensor_msgs.msg import RegionOfInterest
-from std_msgs.msg import Header
-
+from msg_adapters.backend import (
+    POINT32,
+    POLYGON,
+    POLYGON_STAMPED,
+    RCLPY,
+    ROI,
+    VECTOR3,
+    VECTOR3_STAMPED,
+    Backend,
+)
 from msg_adapters.camera_info import Intrinsics
 from msg_adapters.errors import MessageError
-from msg_adapters.stamps import stamp_to_seconds
+from msg_adapters.stamps import msg_seconds
 from swir_tracker_ros.types import Box
 
+if TYPE_CHECKING:
+    from geometry_msgs.msg import PolygonStamped, Vector3Stamped
+    from sensor_msgs.msg import RegionOfInterest
+    from std_msgs.msg import Header
 
-def box_to_polygon(box: Box | None, header: Header) -> PolygonStamped:
+
+def box_to_polygon(box: Box | None, header: Header, backend: Backend = RCLPY) -> PolygonStamped:
     """Four corners TL, TR, BR, BL (x = column, y = row, z = 0); None gives the empty polygon (absent)."""
-    msg = PolygonStamped(header=header)
+    points = []
     if box is not None:
         x0, y0, x1, y1 = box.x, box.y, box.x + box.w, box.y + box.h
-        msg.polygon.points = [Point32(x=float(x), y=float(y), z=0.0)
-                              for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))]
-    return msg
+        point = backend.cls(POINT32)
+        points = [point(x=float(x), y=float(y), z=0.0) for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))]
+    return backend.cls(POLYGON_STAMPED)(header=header, polygon=backend.cls(POLYGON)(points=points))
 
 
 def box_from_polygon(msg: PolygonStamped) -> Box | None:
@@ -39,13 +51,14 @@ def box_from_polygon(msg: PolygonStamped) -> Box | None:
     return Box(min(xs), min(ys), max(xs) - min(xs), max(ys) - min(ys))
 
 
-def box_to_roi(box: Box, width: int, height: int) -> RegionOfInterest:
-    """The integer RegionOfInterest covering `box`, clipped to a width x height image."""
+def box_to_roi(box: Box, width: int, height: int, backend: Backend = RCLPY) -> RegionOfInterest:
+    """The integer RegionOfInterest covering `box` (outward to whole pixels), clipped to a width x height
+    image; the one Box -> ROI conversion (/track/init from the demo supervisor, the harness replay)."""
     x0 = min(max(math.floor(box.x), 0), width)
     y0 = min(max(math.floor(box.y), 0), height)
     x1 = min(max(math.ceil(box.x + box.w), x0), width)
     y1 = min(max(math.ceil(box.y + box.h), y0), height)
-    return RegionOfInterest(x_offset=x0, y_offset=y0, width=x1 - x0, height=y1 - y0, do_rectify=False)
+    return backend.cls(ROI)(x_offset=x0, y_offset=y0, width=x1 - x0, height=y1 - y0, do_rectify=False)
 
 
 def box_from_roi(msg: RegionOfInterest) -> Box:
@@ -77,9 +90,10 @@ def ego_shift(d_pan: float, d_tilt: float, intr: Intrinsics) -> tuple[float, flo
     return intr.fx * math.tan(d_pan), intr.fy * math.tan(d_tilt)
 
 
-def pan_tilt_to_msg(pan: float, tilt: float, header: Header) -> Vector3Stamped:
+def pan_tilt_to_msg(pan: float, tilt: float, header: Header, backend: Backend = RCLPY) -> Vector3Stamped:
     """/track/pan_tilt_error: x = pan error, y = tilt error (rad), z = 0."""
-    return Vector3Stamped(header=header, vector=Vector3(x=float(pan), y=float(tilt), z=0.0))
+    return backend.cls(VECTOR3_STAMPED)(header=header,
+                                        vector=backend.cls(VECTOR3)(x=float(pan), y=float(tilt), z=0.0))
 
 
 def pan_tilt_error_from_msg(msg: Vector3Stamped) -> tuple[float, float, float]:
@@ -90,4 +104,4 @@ def pan_tilt_error_from_msg(msg: Vector3Stamped) -> tuple[float, float, float]:
         raise MessageError(f"Vector3Stamped.vector is not readable ({exc})") from exc
     if not (math.isfinite(pan) and math.isfinite(tilt)):
         raise MessageError(f"Vector3Stamped.vector has non-finite pan/tilt error: x={pan}, y={tilt}")
-    return pan, tilt, stamp_to_seconds(msg.header.stamp)
+    return pan, tilt, msg_seconds(msg)

@@ -3,17 +3,19 @@
 
 from __future__ import annotations
 
-import array
 import sys
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import cv2
 import numpy as np
-from sensor_msgs.msg import Image
-from std_msgs.msg import Header
 
+from msg_adapters.backend import IMAGE, RCLPY, Backend
 from msg_adapters.errors import MessageError
+
+if TYPE_CHECKING:
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import Header
 
 
 @dataclass(frozen=True)
@@ -41,6 +43,7 @@ LAYOUTS: dict[str, Layout] = {
     "16uc1": _MONO16,
     "32fc1": Layout(4, "<f4", 1, None, 32),
     "bgr8": Layout(3, "u1", 3, None, 8),
+    "8uc3": Layout(3, "u1", 3, None, 8),
     "rgb8": Layout(3, "u1", 3, cv2.COLOR_RGB2BGR, 8),
     "bgra8": Layout(4, "u1", 4, cv2.COLOR_BGRA2BGR, 8),
     "rgba8": Layout(4, "u1", 4, cv2.COLOR_RGBA2BGR, 8),
@@ -121,7 +124,8 @@ def image_to_numpy(msg: Image) -> Frame:
     return Frame(pixels, layout.bit_depth)
 
 
-def numpy_to_image(pixels: np.ndarray, header: Header, encoding: str | None = None) -> Image:
+def numpy_to_image(pixels: np.ndarray, header: Header, encoding: str | None = None,
+                   backend: Backend = RCLPY) -> Image:
     """Encode a 2-D uint8/uint16/float32 or HxWx3 BGR uint8 array as an Image (no row padding)."""
     pixels = np.asarray(pixels)
     what = f"array of shape {pixels.shape} and dtype {pixels.dtype}"
@@ -141,6 +145,6 @@ def numpy_to_image(pixels: np.ndarray, header: Header, encoding: str | None = No
         raise MessageError(f"{what} does not match encoding {encoding}")
     height, width = pixels.shape[:2]
     data = np.ascontiguousarray(pixels, dtype=pixels.dtype.newbyteorder("="))
-    return Image(header=header, height=height, width=width, encoding=encoding,
-                 is_bigendian=int(sys.byteorder == "big"), step=width * layout.bytes_per_pixel,
-                 data=array.array("B", data.tobytes()))
+    return backend.cls(IMAGE)(header=header, height=height, width=width, encoding=encoding,
+                              is_bigendian=int(sys.byteorder == "big"), step=width * layout.bytes_per_pixel,
+                              data=backend.u8(data.view(np.uint8)))

@@ -30,3 +30,11 @@ class ParameterError(SwirTrackerError):
 
 class AcquisitionError(SwirTrackerError):
     """Detection, association or the appearance models failed on their input."""
+
+
+class SceneError(SwirTrackerError):
+    """The synthetic scene (world, scenarios, sprites, the demo scene) was asked for something it lacks."""
+
+
+class DemoError(SwirTrackerError):
+    """The closed-loop demo could not start, run or stop one of its processes."""

@@ -17,16 +17,16 @@ from typing import Any
 def param(default: Any, doc: str, lo: float | None = None, hi: float | None = None, **extra: Any) -> Any:
     """A dataclass field with `metadata={"doc": doc, "min": lo, "max": hi, **extra}` (None bounds left out).
 
-    `extra` carries the other contract keys, e.g. `choices=(...)` or `read_only=True`. A list default is
-    copied per instance.
+    `extra` carries the other contract keys, e.g. `choices=(...)` or `read_only=True`. A list or dict
+    default is copied per instance.
     """
     meta: dict[str, Any] = {"doc": doc, **extra}
     if lo is not None:
         meta["min"] = lo
     if hi is not None:
         meta["max"] = hi
-    if isinstance(default, list):
-        return field(default_factory=lambda: list(default), metadata=meta)
+    if isinstance(default, (list, dict)):
+        return field(default_factory=lambda: type(default)(default), metadata=meta)
     return field(default=default, metadata=meta)
 
 

@@ -9,9 +9,9 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.acquisition import crowd
 from swir_tracker_ros.acquisition.detectors import HogPeopleDetector, MotDetFile, MotionDetector
 from swir_tracker_ros.errors import AcquisitionError
+from swir_tracker_ros.scene import crowd
 from swir_tracker_ros.types import Box
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from swir_tracker_ros.acquisition import crowd
 from swir_tracker_ros.acquisition.association import CostWeights
 from swir_tracker_ros.acquisition.descriptors import describe
 from swir_tracker_ros.acquisition.handoff import (
@@ -15,6 +14,7 @@ from swir_tracker_ros.acquisition.handoff import (
     lost_candidates,
     select,
 )
+from swir_tracker_ros.scene import crowd
 from swir_tracker_ros.types import Box
 
 

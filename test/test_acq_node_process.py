@@ -21,7 +21,7 @@ from msg_adapters.acquisition import CANDIDATES_NS, tracks_from_markers
 from msg_adapters.geometry import box_from_roi
 from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header, stamp_to_seconds
-from swir_tracker_ros.acquisition import crowd
+from swir_tracker_ros.scene import crowd
 
 PARAMS = ["--ros-args", "--params-file", str(REPO / "params" / "acquisition.yaml")]
 

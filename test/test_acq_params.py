@@ -10,7 +10,7 @@ from conftest import REPO
 
 from swir_tracker_ros.acquisition.mot import MotParams
 from swir_tracker_ros.acquisition.params import AcquisitionParams
-from swir_tracker_ros.nodes.ros_params import check_metadata
+from swir_tracker_ros.paramfield import validate_params
 
 
 def test_yaml_covers_every_field_with_its_default() -> None:
@@ -21,5 +21,5 @@ def test_yaml_covers_every_field_with_its_default() -> None:
         assert set(given) == {f.name for f in fields(cls)}, cls.__name__
         params = cls(**given)
         params.validate()
-        check_metadata(params)
+        validate_params(params)
         assert params == cls()  # the file documents the defaults

@@ -7,9 +7,9 @@ import motmetrics as mm
 import numpy as np
 import pytest
 
-from swir_tracker_ros.acquisition import crowd
 from swir_tracker_ros.acquisition.detectors import MotionDetector
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
+from swir_tracker_ros.scene import crowd
 
 
 def _identity_map(scene: crowd.CrowdScene, frames: int, tracker: MultiTargetTracker, detector=None,

@@ -58,7 +58,7 @@ def test_yaml_and_docs_are_generated_from_the_dataclasses() -> None:
     assert _yaml_leaves(core) == pytest.approx(leaves), "run tracker --params-yaml > params/tracker.yaml"
     docs = (REPO / "docs" / "tracker_node.md").read_text()
     assert markdown_table(TrackerParams, "tracker.") in docs, (
-        "run: python -m swir_tracker_ros.nodes.param_docs"
+        "run: python -m swir_tracker_ros.param_files"
     )
 
 

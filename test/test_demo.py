@@ -15,10 +15,10 @@ from conftest import REPO, executable
 
 from swir_tracker_ros.demo.analysis import occlusion_episodes, series, summarise
 from swir_tracker_ros.demo.config import DemoParams, load_demo_params
-from swir_tracker_ros.demo.processes import DemoError
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
 from swir_tracker_ros.demo.run import pty_url
+from swir_tracker_ros.errors import DemoError
 
 CAM = {"width": 576, "height": 504, "fx": 4118.0, "fy": 4118.0, "cx": 288.0, "cy": 252.0}
 
@@ -107,7 +107,7 @@ def test_init_is_answered_by_tracking_after_the_first_init() -> None:
     """Init sent for the frame at 100.0 s, resent at 100.5 and 101.0 (the tracker had not answered yet):
     a `tracking` state for the frame at 100.2 answers it (the old rule compared with the last resend and
     waited on, while the head already followed the track)."""
-    from swir_tracker_ros.nodes.demo_supervisor_node import init_answered
+    from swir_tracker_ros.demo.supervisor_node import init_answered
 
     assert init_answered(100.0, "tracking", 100.2)
     assert not init_answered(100.0, "tracking", 99.96)  # a state from before the init

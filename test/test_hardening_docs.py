@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """Issue 14, item 5: the parameter tables in docs/ are the ones generated from the params dataclasses
-(`python -m swir_tracker_ros.nodes.param_docs` rewrites them), nested dataclasses included."""
+(`python -m swir_tracker_ros.param_files` rewrites them), nested dataclasses included."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import pytest
 from conftest import REPO
 
 from swir_tracker_ros.nodes.param_docs import (
-    documented_tables,
     markdown_rows,
     marker,
     replace_table,
@@ -18,6 +17,7 @@ from swir_tracker_ros.nodes.param_docs import (
     walk,
 )
 from swir_tracker_ros.nodes.tracker_node import usage
+from swir_tracker_ros.param_files import documented_tables
 from swir_tracker_ros.tracker import TrackerParams
 
 
@@ -28,7 +28,7 @@ def test_docs_tables_match_the_dataclasses(doc: str, cls: type, prefix: str) -> 
     assert marker(cls, prefix) in text, f"{doc} lacks the table marker of {cls.__name__}"
     assert replace_table(text, cls, prefix) == text, (
         f"{doc}: the {cls.__name__} table differs from the dataclass; run "
-        "`.venv/bin/python -m swir_tracker_ros.nodes.param_docs`")
+        "`.venv/bin/python -m swir_tracker_ros.param_files`")
 
 
 def test_tracker_feature_default_is_the_code_default() -> None:

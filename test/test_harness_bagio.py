@@ -11,7 +11,11 @@ import numpy as np
 import pytest
 
 from msg_adapters import bag as mb
+from msg_adapters.backend import IMAGE, POLYGON_STAMPED, ROSBAGS
 from msg_adapters.errors import MessageError
+from msg_adapters.geometry import box_from_polygon, box_to_polygon
+from msg_adapters.image import image_to_numpy
+from msg_adapters.stamps import header, msg_ns, ns_to_stamp
 from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness import cli
 from swir_tracker_ros.harness.bagio import FrameRecord, bag_info, read_frames, write_bag
@@ -62,28 +66,31 @@ def test_metadata_version_8(tmp_path, storage):
 
 
 def test_image_adapter_honours_step_padding_and_endianness():
-    ts = mb.typestore()
+    # the nodes' image adapter reads rosbags' messages (numpy data) as it reads rclpy's
+    image = ROSBAGS.cls(IMAGE)
+    hdr = header(ns_to_stamp(0, ROSBAGS), "", ROSBAGS)
     img = np.arange(15, dtype=np.uint8).reshape(3, 5)
     padded = np.zeros((3, 8), np.uint8)
     padded[:, :5] = img
-    msg = ts.types[mb.IMAGE](header=mb.header(0), height=3, width=5, encoding="mono8", is_bigendian=0,
-                             step=8, data=padded.reshape(-1))
-    np.testing.assert_array_equal(mb.image_to_array(msg), img)
+    msg = image(header=hdr, height=3, width=5, encoding="mono8", is_bigendian=0, step=8,
+                data=padded.reshape(-1))
+    np.testing.assert_array_equal(image_to_numpy(msg).pixels, img)
     big = np.array([[1, 4095]], dtype=">u2")
-    msg = ts.types[mb.IMAGE](header=mb.header(0), height=1, width=2, encoding="mono16", is_bigendian=1,
-                             step=4, data=big.view(np.uint8).reshape(-1))
-    np.testing.assert_array_equal(mb.image_to_array(msg), [[1, 4095]])
-    msg = ts.types[mb.IMAGE](header=mb.header(0), height=3, width=5, encoding="mono8", is_bigendian=0,
-                             step=4, data=padded.reshape(-1))
+    msg = image(header=hdr, height=1, width=2, encoding="mono16", is_bigendian=1, step=4,
+                data=big.view(np.uint8).reshape(-1))
+    np.testing.assert_array_equal(image_to_numpy(msg).pixels, [[1, 4095]])
+    msg = image(header=hdr, height=3, width=5, encoding="mono8", is_bigendian=0, step=4,
+                data=padded.reshape(-1))
     with pytest.raises(MessageError, match="step 4"):
-        mb.image_to_array(msg)
+        image_to_numpy(msg)
 
 
 def test_polygon_corners_and_empty_polygon():
-    msg = mb.box_to_polygon(Box(1, 2, 3, 4), 5)
+    hdr = header(ns_to_stamp(5, ROSBAGS), "camera", ROSBAGS)
+    msg = mb.deserialize(mb.serialize(box_to_polygon(Box(1, 2, 3, 4), hdr, ROSBAGS)), POLYGON_STAMPED)
     assert [(p.x, p.y) for p in msg.polygon.points] == [(1, 2), (4, 2), (4, 6), (1, 6)]  # TL TR BR BL
-    assert mb.polygon_to_box(msg) == Box(1, 2, 3, 4)
-    assert mb.polygon_to_box(mb.box_to_polygon(None, 5)) is None
+    assert box_from_polygon(msg) == Box(1, 2, 3, 4) and msg_ns(msg) == 5
+    assert box_from_polygon(box_to_polygon(None, hdr, ROSBAGS)) is None
 
 
 def make(tmp_path: Path, storage: str, n: int = 40) -> Path:

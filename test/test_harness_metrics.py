@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.metrics import (
     PRECISION_THRESHOLDS,
     SUCCESS_THRESHOLDS,
@@ -34,7 +35,7 @@ def test_center_errors_skip_absent_gt_and_penalise_missing_boxes():
     gt = [GT, GT, None, GT]
     err = center_errors(pred, gt)
     np.testing.assert_allclose(err, [5.0, math.inf, 30.0])
-    with pytest.raises(ValueError):
+    with pytest.raises(HarnessError):
         center_errors(pred[:2], gt)
 
 

@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness import cli
 from swir_tracker_ros.harness.compare import BENCH, PeerCache, bench_python, run_worker, source_fingerprint
 from swir_tracker_ros.harness.evaluate import Run
@@ -55,7 +56,7 @@ def test_sre_box_rounding_clipping_and_rigid_style():
     s = sre_box(Box(100, 50, 40, 80), "top_right", 640, 480, style="shift")
     assert s.as_tuple() == pytest.approx((104, 42, 40, 80))
     assert sre_box(b, "none", 640, 480) == b
-    with pytest.raises(ValueError):
+    with pytest.raises(HarnessError):
         sre_box(b, "diagonal", 640, 480)
 
 
@@ -69,7 +70,7 @@ def test_false_tracking_counts_only_tracking_frames_off_target():
     gt = [GT, GT, GT, GT, GT, GT, GT, None]
     # frame 2 and 4: tracking on background; frame 6: tracking without a box; frame 7: no ground truth
     assert false_tracking(states, pred, gt) == 3
-    with pytest.raises(ValueError):
+    with pytest.raises(HarnessError):
         false_tracking(states[:-1], pred, gt)
 
 

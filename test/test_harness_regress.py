@@ -82,8 +82,8 @@ def test_forced_down_score_fails_the_gate(tmp_path, monkeypatch, capsys):
     capsys.readouterr()
     real = ev.make_tracker_factory
 
-    def drifting(variant, pipeline="kcf"):
-        make = real(variant, pipeline)
+    def drifting(variant, pipeline="kcf", overrides=()):
+        make = real(variant, pipeline, overrides)
         return lambda: _Drifting(make())
 
     monkeypatch.setattr(ev, "make_tracker_factory", drifting)

@@ -9,7 +9,7 @@ from dataclasses import replace
 import pytest
 
 from swir_tracker_ros.errors import ParameterError, PelcoError
-from swir_tracker_ros.nodes.ros_params import check_metadata
+from swir_tracker_ros.paramfield import validate_params
 from swir_tracker_ros.pelco import codec
 from swir_tracker_ros.pelco.controller import PanTiltController, limit_guard, slew
 from swir_tracker_ros.pelco.params import PositionerParams
@@ -131,7 +131,7 @@ def test_position_words_round_trip_and_vendor_sign() -> None:
 
 
 def test_default_params_validate_and_match_metadata() -> None:
-    check_metadata(PositionerParams().validate())
+    validate_params(PositionerParams().validate())
 
 
 @pytest.mark.parametrize("change", [

@@ -138,7 +138,7 @@ def test_sim_rejects_a_bad_speed_table(processes, tmp_path) -> None:
 def test_sim_does_not_import_rclpy() -> None:
     import subprocess
     import sys
-    code = "import sys, swir_tracker_ros.pelco.sim as s; assert 'rclpy' not in sys.modules"
+    code = "import sys, swir_tracker_ros.simulation.pelco_sim as s; assert 'rclpy' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True)
 
 

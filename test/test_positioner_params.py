@@ -8,7 +8,7 @@ from dataclasses import fields
 import yaml
 from conftest import REPO
 
-from swir_tracker_ros.nodes.ros_params import check_metadata
+from swir_tracker_ros.paramfield import validate_params
 from swir_tracker_ros.pelco.params import PositionerParams
 
 
@@ -17,7 +17,7 @@ def test_yaml_covers_every_field_and_validates() -> None:
     values = doc["positioner_bridge"]["ros__parameters"]
     assert set(values) == {f.name for f in fields(PositionerParams)}
     params = PositionerParams(**values).validate()
-    check_metadata(params)
+    validate_params(params)
     assert params == PositionerParams()  # the file documents the defaults
 
 

@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 from conftest import wait_for
 
-from swir_tracker_ros.demo.world import (
+from swir_tracker_ros.errors import SceneError
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_scene import (
     DEMO_DURATION_S,
     TARGET_ID,
     VARIANTS,
@@ -20,7 +22,6 @@ from swir_tracker_ros.demo.world import (
     initial_target_box,
     scene_names,
 )
-from swir_tracker_ros.scene.camera import CameraView
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +58,7 @@ def test_demo_scene_hides_the_target_while_it_stops(demo_scene) -> None:
 
 
 def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> None:
-    from swir_tracker_ros.demo.world import target_visibility
+    from swir_tracker_ros.scene.demo_scene import target_visibility
 
     vis = target_visibility(demo_scene, [0.5, 9.5, 13.0])
     assert vis[0] > 0.9 and vis[1] < 0.05 and vis[2] > 0.9
@@ -65,7 +66,7 @@ def test_target_visibility_is_head_independent_and_sees_the_wall(demo_scene) -> 
 
 def _hidden_runs(scene, step: float = 0.1) -> list[tuple[float, float]]:
     """Scene-time runs (start, end) with less than half of the target visible."""
-    from swir_tracker_ros.demo.world import target_visibility
+    from swir_tracker_ros.scene.demo_scene import target_visibility
 
     ts = np.arange(0.0, DEMO_DURATION_S, step)
     runs: list[list[float]] = []
@@ -107,8 +108,8 @@ def test_scene_family_variants_are_harder_as_documented(demo_scene) -> None:
     again, _ = build_scene("demo_shake", 7).world.render(0.3, view)
     first, _ = shake.world.render(0.3, view)
     assert np.array_equal(again, first)
-    with pytest.raises(ValueError, match="unknown"):
-        from swir_tracker_ros.demo.world import demo_world
+    with pytest.raises(SceneError, match="unknown"):
+        from swir_tracker_ros.scene.demo_scene import demo_world
 
         demo_world(7, variant="nope")
 
@@ -120,7 +121,7 @@ def test_scene_clock_holds_until_started_and_at_the_end() -> None:
     assert clock.start(105.0) == 100.0  # idempotent
     assert clock.time(103.5) == pytest.approx(3.5)
     assert clock.time(200.0) == 10.0 and clock.finished(200.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(SceneError):
         SceneClock(0.0)
 
 
@@ -129,7 +130,7 @@ def test_build_scene_accepts_harness_scenarios_and_refuses_unknown_names() -> No
     assert names[0] == "demo" and set(VARIANTS) < set(names) and len(names) > len(VARIANTS) + 5
     other = build_scene(next(n for n in names if n not in VARIANTS), seed=1, bits=12, fps=25.0)
     assert other.duration_s > 0 and other.world.sensor.bits == 12
-    with pytest.raises(ValueError, match="unknown scene"):
+    with pytest.raises(SceneError, match="unknown scene"):
         build_scene("no_such_scene", seed=0)
 
 
@@ -138,7 +139,7 @@ def test_ground_truth_state_round_trip_and_camera_info() -> None:
     from msg_adapters.errors import MessageError
     from msg_adapters.ground_truth import ground_truth_state_msg, ground_truth_state_values
     from msg_adapters.stamps import header
-    from swir_tracker_ros.nodes.scene_camera_node import camera_info_msg, ground_truth_values
+    from swir_tracker_ros.simulation.scene_camera_node import camera_info_msg, ground_truth_values
 
     scene = build_scene("demo", seed=7)
     view = CameraView(0.01, -0.005, 8.0, 576, 504)

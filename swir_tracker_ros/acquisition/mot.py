@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
@@ -24,9 +24,9 @@ from swir_tracker_ros.acquisition.motion import (
     state_from_box,
 )
 from swir_tracker_ros.acquisition.siamese import SiameseFamily
-from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman.standard import predict, update
 from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
 from swir_tracker_ros.types import Box
 
 
@@ -91,11 +91,8 @@ class MotParams:
     v0_rel: float = _f(0.15, "initial velocity std as a fraction of the box height per frame", 1e-3, 10.0)
 
     def validate(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            lo, hi = f.metadata.get("min"), f.metadata.get("max")
-            if (lo is not None and v < lo) or (hi is not None and v > hi):
-                raise ParameterError(f"MotParams.{f.name} = {v!r} is outside [{lo}, {hi}]")
+        """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`)."""
+        validate_params(self)
 
     def cost_weights(self) -> CostWeights:
         base = BaseWeights(self.w_lbp, self.w_mean, self.w_std, self.w_height, self.w_width, self.w_score,

@@ -3,8 +3,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
+from swir_tracker_ros import topics
 from swir_tracker_ros.acquisition.detectors import (
     Detector,
     HogParams,
@@ -15,6 +16,7 @@ from swir_tracker_ros.acquisition.detectors import (
 from swir_tracker_ros.acquisition.handoff import AutoInitParams
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
 
 DETECTORS = ("motion", "hog")
 
@@ -23,8 +25,8 @@ DETECTORS = ("motion", "hog")
 class AcquisitionParams:
     """Topics, detector choice, hand-off behaviour and the detectors' settings."""
 
-    image_topic: str = _f("/camera/image_raw", "input sensor_msgs/Image topic", read_only=True)
-    joint_states_topic: str = _f("/positioner/joint_states", "head joint states for ego-motion",
+    image_topic: str = _f(topics.IMAGE, "input sensor_msgs/Image topic", read_only=True)
+    joint_states_topic: str = _f(topics.JOINT_STATES, "head joint states for ego-motion",
                                  read_only=True)
     detector: str = _f("motion", "detector: motion (background subtraction) or hog (OpenCV people)",
                        choices=DETECTORS)
@@ -47,13 +49,11 @@ class AcquisitionParams:
     auto_window: int = _f(10, "automatic confirmation: frames allowed", 1, 1000)
 
     def validate(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            lo, hi = f.metadata.get("min"), f.metadata.get("max")
-            if (lo is not None and v < lo) or (hi is not None and v > hi):
-                raise ParameterError(f"parameter {f.name} = {v!r} is outside [{lo}, {hi}]")
-        if self.detector not in DETECTORS:
-            raise ParameterError(f"parameter detector = {self.detector!r} is not one of {list(DETECTORS)}")
+        """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`)."""
+        validate_params(self)
+
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
         if self.auto_updates > self.auto_window:
             raise ParameterError(f"parameter auto_updates = {self.auto_updates} exceeds auto_window "
                                  f"= {self.auto_window}")

@@ -15,11 +15,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from swir_tracker_ros.errors import SwirTrackerError
-
-
-class DemoError(SwirTrackerError):
-    """The closed-loop demo could not start, run or stop one of its processes."""
+from swir_tracker_ros.errors import DemoError
 
 
 def find_executable(name: str) -> str:

@@ -10,23 +10,15 @@ from pathlib import Path
 from typing import Any
 
 from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
 
-from swir_tracker_ros.demo.processes import DemoError
+from msg_adapters.backend import typestore
+from swir_tracker_ros import topics
+from swir_tracker_ros.errors import DemoError
 
 # Topics recorded into the bag and their ROS 2 types (docs/interfaces.md; /ground_truth/state: docs/demo.md).
-RECORDED_TOPICS: dict[str, str] = {
-    "/camera/image_raw": "sensor_msgs/msg/Image",
-    "/camera/camera_info": "sensor_msgs/msg/CameraInfo",
-    "/ground_truth/box": "geometry_msgs/msg/PolygonStamped",
-    "/ground_truth/state": "diagnostic_msgs/msg/DiagnosticArray",
-    "/track/init": "sensor_msgs/msg/RegionOfInterest",
-    "/track/box": "geometry_msgs/msg/PolygonStamped",
-    "/track/pan_tilt_error": "geometry_msgs/msg/Vector3Stamped",
-    "/track/state": "diagnostic_msgs/msg/DiagnosticArray",
-    "/positioner/joint_states": "sensor_msgs/msg/JointState",
-    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
-}
+RECORDED_TOPICS: dict[str, str] = {t: topics.TYPES[t] for t in (
+    topics.IMAGE, topics.CAMERA_INFO, topics.GROUND_TRUTH_BOX, topics.GROUND_TRUTH_STATE, topics.TRACK_INIT,
+    topics.TRACK_BOX, topics.PAN_TILT_ERROR, topics.TRACK_STATE, topics.JOINT_STATES, topics.DIAGNOSTICS)}
 
 
 class BagRecorder:
@@ -43,7 +35,7 @@ class BagRecorder:
         if plugin is None:
             raise DemoError(f"bag storage {storage!r} is not 'mcap' or 'sqlite3'")
         self.path = path
-        self._typestore = get_typestore(Stores.ROS2_JAZZY)
+        self._typestore = typestore()
         self._writer = Writer(path, version=9, storage_plugin=plugin)
         self._writer.open()
         self._connections: dict[str, Any] = {}

@@ -14,10 +14,11 @@ from pathlib import Path
 
 from swir_tracker_ros.demo.analysis import RunSummary, summarise
 from swir_tracker_ros.demo.config import DemoParams, dds_profile, load_demo_params, params_dir
-from swir_tracker_ros.demo.processes import DemoError, ProcessGroup, find_executable, ros_environment, tail
+from swir_tracker_ros.demo.processes import ProcessGroup, find_executable, ros_environment, tail
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
-from swir_tracker_ros.demo.world import VARIANTS, build_scene, target_visibility
+from swir_tracker_ros.errors import DemoError
+from swir_tracker_ros.scene.demo_scene import VARIANTS, build_scene, target_visibility
 
 RUN_DIRS = {True: "ego_on", False: "ego_off"}
 
@@ -97,7 +98,7 @@ def run_once(p: DemoParams, out: Path, ego: bool, run_index: int, log=print, vid
         group.start("tracker", [find_executable("tracker"), *_ros_args(
             pdir / "tracker.yaml", {**p.tracker_overrides, "ego_motion_compensation": ego})])
         supervisor = group.start("demo_supervisor", [
-            sys.executable, "-m", "swir_tracker_ros.nodes.demo_supervisor_node", "--out", str(folder),
+            sys.executable, "-m", "swir_tracker_ros.demo.supervisor_node", "--out", str(folder),
             "--duration", str(p.duration_s), "--label", p.scene, "--ego", str(int(ego)),
             "--storage", p.storage, "--bag-images", str(int(p.bag_images)),
             "--startup-timeout", str(p.startup_timeout_s), "--video", str(int(video)),

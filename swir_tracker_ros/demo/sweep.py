@@ -15,8 +15,8 @@ from pathlib import Path
 
 from swir_tracker_ros.demo.analysis import RunSummary
 from swir_tracker_ros.demo.config import load_demo_params
-from swir_tracker_ros.demo.processes import DemoError
-from swir_tracker_ros.demo.world import VARIANTS
+from swir_tracker_ros.errors import DemoError
+from swir_tracker_ros.scene.demo_scene import VARIANTS
 
 # A run succeeds when the target is in view at the end and for at least this share of the run, and the
 # tracker never reported `tracking` off the target (issue 13's "done when").
@@ -151,7 +151,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> int:
     from swir_tracker_ros.demo.analysis import summarise
     from swir_tracker_ros.demo.run import run_once
-    from swir_tracker_ros.demo.world import build_scene, target_visibility
+    from swir_tracker_ros.scene.demo_scene import build_scene, target_visibility
 
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:

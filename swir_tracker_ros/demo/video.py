@@ -8,7 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from swir_tracker_ros.demo.processes import DemoError
+from swir_tracker_ros.errors import DemoError
 
 
 def caption(frame: np.ndarray, text: str) -> np.ndarray:

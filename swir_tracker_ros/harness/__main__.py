@@ -5,6 +5,6 @@ from __future__ import annotations
 
 import sys
 
-from .cli import main
+from swir_tracker_ros.harness.cli import main
 
 sys.exit(main())

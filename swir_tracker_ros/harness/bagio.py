@@ -13,22 +13,26 @@ import numpy as np
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StoragePlugin, Writer
 
 from msg_adapters import bag as mb
+from msg_adapters.backend import ROSBAGS
+from msg_adapters.camera_info import camera_info_from_intrinsics, intrinsics_from_matrix
 from msg_adapters.errors import MessageError
-
-from ..errors import HarnessError
-from ..types import Box
-from .salvage import scan
+from msg_adapters.geometry import box_from_polygon, box_to_polygon
+from msg_adapters.ground_truth import occluded_from_msg, occluded_msg
+from msg_adapters.image import image_to_numpy, numpy_to_image
+from msg_adapters.stamps import header, msg_ns, ns_to_stamp
+from swir_tracker_ros import topics
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.salvage import scan
+from swir_tracker_ros.types import Box
 
 try:  # Python 3.14 ships compression.zstd; rosbags depends on the backport before that
     from compression import zstd  # type: ignore[import-not-found]
 except ImportError:  # pragma: no cover - depends on the interpreter
     from backports import zstd  # type: ignore[import-not-found,no-redef]
 
-IMAGE_TOPIC = "/camera/image_raw"
-INFO_TOPIC = "/camera/camera_info"
-GT_TOPIC = "/ground_truth/box"
-OCCLUDED_TOPIC = "/ground_truth/occluded"  # std_msgs/Bool per frame (synthetic scenarios)
-BOOL = "std_msgs/msg/Bool"
+# The topics of a harness bag; /ground_truth/occluded (std_msgs/Bool per frame) only for synthetic scenarios.
+IMAGE_TOPIC, INFO_TOPIC = topics.IMAGE, topics.CAMERA_INFO
+GT_TOPIC, OCCLUDED_TOPIC = topics.GROUND_TRUTH_BOX, topics.GROUND_TRUTH_OCCLUDED
 
 
 @dataclass(frozen=True)
@@ -93,23 +97,28 @@ def write_bag(out: Path, frames: Iterable[FrameRecord], *, storage: str = "sqlit
         with _open_writer(out, plugin, compress, version) as w:
             for key, value in (custom or {}).items():
                 w.set_custom_data(key, value)
-            img_c = w.add_connection(IMAGE_TOPIC, mb.IMAGE, typestore=ts)
-            gt_c = w.add_connection(GT_TOPIC, mb.POLYGON_STAMPED, typestore=ts)
-            info_c = w.add_connection(INFO_TOPIC, mb.CAMERA_INFO, typestore=ts) if camera_info else None
+            img_c = w.add_connection(IMAGE_TOPIC, topics.TYPES[IMAGE_TOPIC], typestore=ts)
+            gt_c = w.add_connection(GT_TOPIC, topics.TYPES[GT_TOPIC], typestore=ts)
+            info_c = (w.add_connection(INFO_TOPIC, topics.TYPES[INFO_TOPIC], typestore=ts) if camera_info
+                      else None)
+            intr = d = None
+            if camera_info:
+                ci = camera_info
+                intr = intrinsics_from_matrix(list(ci["k"]), int(ci["width"]), int(ci["height"]))
+                d = ci.get("d") or (0.0,) * 5
             occ_c = None
             for fr in frames:
                 t = fr.stamp_ns
-                w.write(img_c, t, mb.serialize(mb.image_msg(fr.image, t, frame_id)))
+                hdr = header(ns_to_stamp(t, ROSBAGS), frame_id, ROSBAGS)
+                w.write(img_c, t, mb.serialize(numpy_to_image(fr.image, hdr, backend=ROSBAGS)))
                 if info_c is not None:
-                    ci = camera_info
-                    info = mb.camera_info_msg(int(ci["width"]), int(ci["height"]), list(ci["k"]), t, frame_id,
-                                              ci.get("d"))
+                    info = camera_info_from_intrinsics(intr, hdr, d=d, backend=ROSBAGS)
                     w.write(info_c, t, mb.serialize(info))
-                w.write(gt_c, t, mb.serialize(mb.box_to_polygon(fr.gt, t, frame_id)))
+                w.write(gt_c, t, mb.serialize(box_to_polygon(fr.gt, hdr, ROSBAGS)))
                 if fr.occluded is not None:
                     if occ_c is None:
-                        occ_c = w.add_connection(OCCLUDED_TOPIC, BOOL, typestore=ts)
-                    w.write(occ_c, t, mb.serialize(ts.types[BOOL](data=bool(fr.occluded))))
+                        occ_c = w.add_connection(OCCLUDED_TOPIC, topics.TYPES[OCCLUDED_TOPIC], typestore=ts)
+                    w.write(occ_c, t, mb.serialize(occluded_msg(fr.occluded, ROSBAGS)))
                 n += 1
     except MessageError as exc:
         raise HarnessError(f"{out}: frame {n} cannot be written: {exc}") from None
@@ -365,29 +374,28 @@ def read_frames(path: Path | str, image_topic: str | None = None, gt_topic: str 
     Raises HarnessError when the bag has no image topic, is corrupt, or yields fewer images than declared.
     """
     br = BagReader(path)
-    img_t = pick_topic(br, image_topic, IMAGE_TOPIC, mb.IMAGE)
+    img_t = pick_topic(br, image_topic, IMAGE_TOPIC, topics.TYPES[IMAGE_TOPIC])
     if img_t is None:
         raise HarnessError(f"{br.path}: no sensor_msgs/msg/Image topic (topics: {', '.join(br.topics())})")
-    box_t = pick_topic(br, gt_topic, GT_TOPIC, mb.POLYGON_STAMPED)
+    box_t = pick_topic(br, gt_topic, GT_TOPIC, topics.TYPES[GT_TOPIC])
     gts: dict[int, Box | None] = {}
     occ: dict[int, bool] = {}
     side = {t for t in (box_t, OCCLUDED_TOPIC) if t}
     for topic, msgtype, t, raw in br.messages(side):
         msg = br.deserialize(raw, msgtype, f"{topic} at {t} ns")
-        stamp = mb.stamp_to_ns(msg.header.stamp) if topic == box_t else t
         try:
             if topic == box_t:
-                gts[stamp] = mb.polygon_to_box(msg)
+                gts[msg_ns(msg)] = box_from_polygon(msg)
             else:
-                occ[t] = bool(msg.data)
+                occ[t] = occluded_from_msg(msg)
         except MessageError as exc:
             raise HarnessError(f"{br.path}: {topic} at {t} ns: {exc}") from None
     k, last = 0, "none"
     for _topic, msgtype, t, raw in br.messages({img_t}):
         msg = br.deserialize(raw, msgtype, f"image #{k + 1} at {t} ns (last good image: {last})")
-        stamp = mb.stamp_to_ns(msg.header.stamp)
         try:
-            image = mb.image_to_array(msg)
+            stamp = msg_ns(msg)
+            image = image_to_numpy(msg).pixels
         except MessageError as exc:
             raise HarnessError(f"{br.path}: image #{k + 1} at {t} ns: {exc}") from None
         yield FrameRecord(stamp, image, gts.get(stamp), occ.get(t), k)

@@ -9,10 +9,10 @@ import signal
 import sys
 from pathlib import Path
 
-from ..errors import HarnessError
-from .bagio import FrameRecord, bag_info, write_bag
-from .evaluate import VARIANTS, EvalResult, evaluate, format_table
-from .sources import SYNTH_PREFIX, Source, convert_bits, open_source
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.bagio import FrameRecord, bag_info, write_bag
+from swir_tracker_ros.harness.evaluate import VARIANTS, EvalResult, evaluate, format_table
+from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, convert_bits, open_source
 
 DEFAULT_PEER_CACHE = str(Path.home() / ".cache" / "swir_tracker_ros" / "peers")
 
@@ -29,11 +29,11 @@ def _bag_from_source(src: Source, out: Path, storage: str, compress: str | None,
     src_bits = src.bits or (8 if first.image.dtype.itemsize == 1 else 16)
     out_bits = bits or src_bits
     if src.kind == "synth":
-        from ..scene.scenarios import make_scenario
+        from swir_tracker_ros.scene.scenarios import make_scenario
 
         cam = make_scenario(src.location).views[0].camera_info()
     else:
-        from ..scene.camera import CameraView
+        from swir_tracker_ros.scene.camera import CameraView
 
         h, w = first.image.shape[:2]
         cam = CameraView(hfov_deg=hfov_deg, width=w, height=h).camera_info()
@@ -58,7 +58,7 @@ def cmd_make_bag(a: argparse.Namespace) -> int:
 
 
 def cmd_synth(a: argparse.Namespace) -> int:
-    from ..scene import scenarios
+    from swir_tracker_ros.scene import scenarios
 
     if a.list or not a.name:
         for name, spec in scenarios().items():
@@ -101,7 +101,7 @@ def _sources(a: argparse.Namespace) -> list[Source]:
     srcs = []
     for spec in a.bags:
         if spec == SYNTH_PREFIX + "all":  # every synthetic scenario (`harness synth --list`)
-            from ..scene import scenarios
+            from swir_tracker_ros.scene import scenarios
 
             srcs += [open_source(SYNTH_PREFIX + n, a.frames) for n in scenarios()]
             continue
@@ -122,7 +122,7 @@ def _finish(result: EvalResult, a: argparse.Namespace) -> None:
         Path(a.json).write_text(json.dumps(result.to_json(curves=a.curves), indent=1))
         print(f"wrote {a.json}")
     if a.plots:
-        from .plots import plot_result
+        from swir_tracker_ros.harness.plots import plot_result
 
         paths = plot_result(result, a.plots)
         print(f"wrote {len(paths)} plots to {a.plots}")
@@ -142,7 +142,7 @@ def cmd_eval(a: argparse.Namespace) -> int:
 def cmd_compare(a: argparse.Namespace) -> int:
     if a.protocol:
         return _compare_protocol(a)
-    from .compare import add_opencv
+    from swir_tracker_ros.harness.compare import add_opencv
 
     srcs = _sources(a)
     reuse = EvalResult()
@@ -164,8 +164,13 @@ def _compare_protocol(a: argparse.Namespace) -> int:
     """`compare --protocol ope sre`: OPE/SRE tables, false tracking, occlusions survived (protocol.py)."""
     import os
 
-    from ..tracker import TrackerParams
-    from .protocol import ProtocolResult, format_markdown, format_protocol, run_protocol
+    from swir_tracker_ros.harness.protocol import (
+        ProtocolResult,
+        format_markdown,
+        format_protocol,
+        run_protocol,
+    )
+    from swir_tracker_ros.tracker import TrackerParams
 
     if a.plots or a.curves:
         raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
@@ -204,7 +209,7 @@ def _compare_protocol(a: argparse.Namespace) -> int:
 
 
 def cmd_replay(a: argparse.Namespace) -> int:
-    from .replay import replay
+    from swir_tracker_ros.harness.replay import replay
 
     out = Path(a.out) if a.out else Path(str(Path(a.bag).resolve()) + "_replayed")
     res = replay(a.bag, out, a.rate, a.wait, a.grace)
@@ -215,7 +220,12 @@ def cmd_replay(a: argparse.Namespace) -> int:
 
 
 def cmd_regress(a: argparse.Namespace) -> int:
-    from .regress import DEFAULT_SEQUENCES, config_path, format_violations, run_regression
+    from swir_tracker_ros.harness.regress import (
+        DEFAULT_SEQUENCES,
+        config_path,
+        format_violations,
+        run_regression,
+    )
 
     cfg = config_path(a.config or a.set)
     result, violations = run_regression(cfg, Path(a.sequences or DEFAULT_SEQUENCES), _progress(a))

@@ -17,12 +17,12 @@ from collections.abc import Callable, Sequence
 from functools import lru_cache
 from pathlib import Path
 
-from ..errors import HarnessError
-from ..types import Box
-from .bench_worker import WORKER_VERSION
-from .evaluate import EvalResult, Run
-from .metrics import score
-from .sources import Source
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.bench_worker import WORKER_VERSION
+from swir_tracker_ros.harness.evaluate import EvalResult, Run
+from swir_tracker_ros.harness.metrics import score
+from swir_tracker_ros.harness.sources import Source
+from swir_tracker_ros.types import Box
 
 REPO = Path(__file__).resolve().parents[2]
 BENCH = REPO / ".venv-bench"

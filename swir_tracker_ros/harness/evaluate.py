@@ -11,11 +11,11 @@ from dataclasses import dataclass, field, fields, is_dataclass, replace
 
 import numpy as np
 
-from ..core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
-from ..errors import HarnessError, SwirTrackerError
-from ..types import Box, TrackState
-from .metrics import Score, mean_scores, score, sre_box
-from .sources import Source
+from swir_tracker_ros.core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
+from swir_tracker_ros.errors import HarnessError, SwirTrackerError
+from swir_tracker_ros.harness.metrics import Score, mean_scores, score, sre_box
+from swir_tracker_ros.harness.sources import Source
+from swir_tracker_ros.types import Box, TrackState
 
 SUMMARY_FIELDS = ("precision_20", "success_auc", "center_error", "lost_frames", "fps")
 
@@ -98,8 +98,8 @@ def tracker_params(variant: str, pipeline: str | None = None, overrides: Sequenc
     Validated; a bad name or value is a HarnessError."""
     import yaml
 
-    from ..errors import ParameterError
-    from ..tracker import TrackerParams
+    from swir_tracker_ros.errors import ParameterError
+    from swir_tracker_ros.tracker import TrackerParams
 
     kw = {"variant": variant} if pipeline is None else {"variant": variant, "pipeline": pipeline}
     try:
@@ -118,7 +118,7 @@ def tracker_params(variant: str, pipeline: str | None = None, overrides: Sequenc
 def make_tracker_factory(variant: str, pipeline: str | None = None,
                          overrides: Sequence[str] = ()) -> Callable[[], object]:
     """A zero-argument constructor of the core `Tracker` for one variant (`tracker_params`)."""
-    from ..tracker import Tracker
+    from swir_tracker_ros.tracker import Tracker
 
     params = tracker_params(variant, pipeline, overrides)
     return lambda: Tracker(deepcopy(params))
@@ -194,6 +194,7 @@ def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str |
              overrides: Sequence[str] = ()) -> EvalResult:
     """Score every variant on every source (sequence names must be unique); rows in `reuse` are kept."""
     result = EvalResult()
+    factories: dict[str, Callable[[], object]] = {}  # one validated TrackerParams per variant, built once
     for src in sources:
         if src.name in result.sequences:
             raise HarnessError(f"two sources are both called {src.name!r}")
@@ -202,9 +203,9 @@ def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str |
             if reuse is not None and v in reuse.sequences.get(src.name, {}):
                 result.sequences[src.name][v] = reuse.sequences[src.name][v]
                 continue
-            factory = make_tracker_factory(v, pipeline, overrides) if overrides else \
-                make_tracker_factory(v, pipeline)  # (two-argument form: test doubles patch it)
-            run = run_source(src, factory)
+            if v not in factories:
+                factories[v] = make_tracker_factory(v, pipeline, overrides)
+            run = run_source(src, factories[v])
             s = run.score()
             result.sequences[src.name][v] = s
             if progress:

@@ -9,7 +9,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..types import Box
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.types import Box
 
 PRECISION_THRESHOLDS = np.arange(0, 51, dtype=np.float64)  # pixels, OTB default 0..50
 SUCCESS_THRESHOLDS = np.round(np.arange(0, 21) * 0.05, 2)  # IoU 0, 0.05, ..., 1 (21 values)
@@ -21,7 +22,7 @@ def center_errors(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> np.nd
     Frames whose ground truth is absent (None) are not scored (they are dropped from the result).
     """
     if len(pred) != len(gt):
-        raise ValueError(f"{len(pred)} predictions for {len(gt)} ground-truth frames")
+        raise HarnessError(f"{len(pred)} predictions for {len(gt)} ground-truth frames")
     return np.array([math.inf if p is None or not p.is_finite() else p.center_distance(g)
                      for p, g in zip(pred, gt) if g is not None], dtype=np.float64)
 
@@ -29,7 +30,7 @@ def center_errors(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> np.nd
 def overlaps(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> np.ndarray:
     """IoU per frame with ground truth; 0 where the tracker gave no box."""
     if len(pred) != len(gt):
-        raise ValueError(f"{len(pred)} predictions for {len(gt)} ground-truth frames")
+        raise HarnessError(f"{len(pred)} predictions for {len(gt)} ground-truth frames")
     return np.array([0.0 if p is None or not p.is_finite() else p.iou(g)
                      for p, g in zip(pred, gt) if g is not None], dtype=np.float64)
 
@@ -103,7 +104,7 @@ def score(pred: Sequence[Box | None], gt: Sequence[Box | None], seconds: float =
 def mean_scores(scores: Sequence[Score]) -> Score:
     """Per-sequence mean of the scores and curves (each sequence weighs the same)."""
     if not scores:
-        raise ValueError("no scores to average")
+        raise HarnessError("no scores to average")
     occ = [s.occluded_precision_20 for s in scores if s.occluded_precision_20 is not None]
     fin = [s.center_error for s in scores if math.isfinite(s.center_error)]
     return Score(
@@ -149,7 +150,7 @@ def sre_box(box: Box, perturbation: str, width: int, height: int, style: str = "
     kept (the box moves), then a box reaching past the right or bottom edge is cut there.
     """
     if style not in SRE_STYLES:
-        raise ValueError(f"SRE style {style!r}; choose from {', '.join(SRE_STYLES)}")
+        raise HarnessError(f"SRE style {style!r}; choose from {', '.join(SRE_STYLES)}")
     x, y, w, h = box.as_tuple()
     if perturbation.startswith("scale_"):
         r = float(perturbation.removeprefix("scale_"))
@@ -174,7 +175,7 @@ def sre_box(box: Box, perturbation: str, width: int, height: int, style: str = "
                 y1 = _mround(y1 - 1 + SRE_SHIFT * h) + 1
             w, h = x1 - x, y1 - y
     elif perturbation != "none":
-        raise ValueError(f"unknown SRE perturbation {perturbation!r}")
+        raise HarnessError(f"unknown SRE perturbation {perturbation!r}")
     if x < 0:
         x = 0.0
     if y < 0:
@@ -202,7 +203,7 @@ def false_tracking(states: Sequence[str], pred: Sequence[Box | None], gt: Sequen
     target it cannot show). For OpenCV trackers the harness maps `ok` to `tracking`.
     """
     if not len(states) == len(pred) == len(gt):
-        raise ValueError(f"{len(states)} states, {len(pred)} boxes, {len(gt)} ground-truth frames")
+        raise HarnessError(f"{len(states)} states, {len(pred)} boxes, {len(gt)} ground-truth frames")
     return sum(1 for s, p, g in zip(states, pred, gt)
                if s == "tracking" and g is not None and (p is None or not p.is_finite() or p.iou(g) <= 0.0))
 

@@ -11,8 +11,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from .evaluate import EvalResult
-from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS, Score
+from swir_tracker_ros.harness.evaluate import EvalResult
+from swir_tracker_ros.harness.metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS, Score
 
 
 def _safe(name: str) -> str:

@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import HarnessError
-from .evaluate import Run, make_tracker_factory, run_starts
-from .metrics import (
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.evaluate import Run, make_tracker_factory, run_starts
+from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
     false_tracking,
     occlusion_episodes,
@@ -31,7 +31,7 @@ from .metrics import (
     score,
     zero_overlap,
 )
-from .sources import Source
+from swir_tracker_ros.harness.sources import Source
 
 PROTOCOLS = ("ope", "sre")
 PEER_PREFIX = "opencv_"
@@ -103,7 +103,7 @@ def execute(task: Task) -> TaskResult:
         runs = run_starts(task.source, factory, task.starts, task.style)
         computed = len(runs)
     else:
-        from .compare import PeerCache, peer_runs
+        from swir_tracker_ros.harness.compare import PeerCache, peer_runs
 
         runs, computed = peer_runs(task.source, task.peer, task.starts, task.style,
                                    PeerCache(task.cache_root), Path(task.bench_py), task.opencv)
@@ -235,7 +235,7 @@ def run_protocol(sources: Sequence[Source], variants: Sequence[str], peers: Sequ
             "overrides": list(overrides), "jobs": jobs,
             "scored": "frames after the start frame", "peer_cache": str(cache_root) if cache_root else None}
     if peers:
-        from .compare import bench_python, opencv_version
+        from swir_tracker_ros.harness.compare import bench_python, opencv_version
 
         py = bench_python()
         meta["opencv"] = opencv_version(py)

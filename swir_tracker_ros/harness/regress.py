@@ -12,11 +12,11 @@ from pathlib import Path
 
 import yaml
 
-from ..errors import HarnessError
-from .bagio import FrameRecord, write_bag
-from .evaluate import EvalResult, evaluate
-from .metrics import Score
-from .sources import Source, open_source
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.bagio import FrameRecord, write_bag
+from swir_tracker_ros.harness.evaluate import EvalResult, evaluate
+from swir_tracker_ros.harness.metrics import Score
+from swir_tracker_ros.harness.sources import Source, open_source
 
 REPO = Path(__file__).resolve().parents[2]
 REGRESSION_DIR = REPO / "test" / "regression"

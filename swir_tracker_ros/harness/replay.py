@@ -8,27 +8,24 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.rosbag2 import StoragePlugin, Writer
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
-from std_msgs.msg import Bool
 
 from msg_adapters import bag as mb
+from msg_adapters.backend import RCLPY, ROSBAGS
+from msg_adapters.geometry import box_from_polygon, box_to_roi
+from msg_adapters.ground_truth import occluded_from_msg
+from msg_adapters.image import image_to_numpy
+from msg_adapters.qos import profile
+from msg_adapters.stamps import clock_msg, msg_ns, ns_to_stamp
+from swir_tracker_ros import topics
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC, BagReader
+from swir_tracker_ros.harness.metrics import Score, score
+from swir_tracker_ros.types import Box
 
-from ..errors import HarnessError
-from ..types import Box
-from .bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC, BagReader
-from .metrics import Score, score
-
-RECORDED = {"/track/box": (PolygonStamped, mb.POLYGON_STAMPED),
-            "/track/state": (DiagnosticArray, mb.DIAGNOSTIC_ARRAY),
-            "/track/pan_tilt_error": (Vector3Stamped, mb.VECTOR3_STAMPED)}
-PLAYED = {IMAGE_TOPIC: Image, INFO_TOPIC: CameraInfo, GT_TOPIC: PolygonStamped, OCCLUDED_TOPIC: Bool}
-RELIABLE = QoSProfile(depth=50, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+RECORDED = (topics.TRACK_BOX, topics.TRACK_STATE, topics.PAN_TILT_ERROR)
+PLAYED = (IMAGE_TOPIC, INFO_TOPIC, GT_TOPIC, OCCLUDED_TOPIC)
 
 
 @dataclass
@@ -42,14 +39,15 @@ class ReplayResult:
 class _Player(Node):
     def __init__(self) -> None:
         super().__init__("harness_replay")
-        self.pubs = {t: self.create_publisher(cls, t, RELIABLE) for t, cls in PLAYED.items()}
-        self.clock_pub = self.create_publisher(Clock, "/clock", RELIABLE)
-        self.init_pub = self.create_publisher(RegionOfInterest, "/track/init", QoSProfile(
-            depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE))
+        record = profile(topics.RECORD)
+        self.pubs = {t: self.create_publisher(RCLPY.cls(topics.TYPES[t]), t, record) for t in PLAYED}
+        self.clock_pub = self.create_publisher(RCLPY.cls(topics.TYPES[topics.CLOCK]), topics.CLOCK, record)
+        self.init_pub = self.create_publisher(RCLPY.cls(topics.TYPES[topics.TRACK_INIT]), topics.TRACK_INIT,
+                                              profile(topics.RELIABLE))
         self.received: list[tuple[str, int, bytes]] = []
-        for topic, (cls, _) in RECORDED.items():
-            self.create_subscription(cls, topic, lambda raw, t=topic: self._record(t, raw), RELIABLE,
-                                     raw=True)
+        for topic in RECORDED:
+            self.create_subscription(RCLPY.cls(topics.TYPES[topic]), topic,
+                                     lambda raw, t=topic: self._record(t, raw), record, raw=True)
         self.sim_ns = 0
 
     def _record(self, topic: str, raw: bytes) -> None:
@@ -57,7 +55,7 @@ class _Player(Node):
 
     def publish_clock(self, ns: int) -> None:
         self.sim_ns = ns
-        self.clock_pub.publish(mb.serialize(mb.clock_msg(ns)))
+        self.clock_pub.publish(mb.serialize(clock_msg(ns_to_stamp(ns, ROSBAGS), ROSBAGS)))
 
 
 def _spin_for(node: Node, seconds: float) -> None:
@@ -78,15 +76,19 @@ def replay(bag: Path | str, out: Path | str, rate: float = 1.0, wait_s: float = 
     msgs = [(topic, t, raw) for topic, _, t, raw in br.messages(set(PLAYED))]
     gt_stamps: dict[int, Box | None] = {}
     occluded: dict[int, bool] = {}
+    first_image = None
     for topic, t, raw in msgs:
         if topic == GT_TOPIC:
-            m = mb.deserialize(raw, mb.POLYGON_STAMPED)
-            gt_stamps[mb.stamp_to_ns(m.header.stamp)] = mb.polygon_to_box(m)
+            m = mb.deserialize(raw, topics.TYPES[GT_TOPIC])
+            gt_stamps[msg_ns(m)] = box_from_polygon(m)
         elif topic == OCCLUDED_TOPIC:
-            occluded[t] = bool(mb.deserialize(raw, "std_msgs/msg/Bool").data)
+            occluded[t] = occluded_from_msg(mb.deserialize(raw, topics.TYPES[OCCLUDED_TOPIC]))
+        elif topic == IMAGE_TOPIC and first_image is None:
+            first_image = image_to_numpy(mb.deserialize(raw, topics.TYPES[IMAGE_TOPIC])).pixels
     first_gt = next((b for _, b in sorted(gt_stamps.items()) if b is not None), None)
-    if not any(topic == IMAGE_TOPIC for topic, _, _ in msgs) or first_gt is None:
+    if first_image is None or first_gt is None:
         raise HarnessError(f"{bag}: replay needs {IMAGE_TOPIC} and a non-empty {GT_TOPIC}")
+    height, width = first_image.shape[:2]
     owns_context = not rclpy.ok()
     if owns_context:
         rclpy.init()
@@ -96,12 +98,12 @@ def replay(bag: Path | str, out: Path | str, rate: float = 1.0, wait_s: float = 
         pubs = (node.pubs[IMAGE_TOPIC], node.init_pub)
         while min(p.get_subscription_count() for p in pubs) == 0:
             if time.monotonic() > end:
-                raise HarnessError(f"no subscriber on {IMAGE_TOPIC} and /track/init after {wait_s:.0f} s; "
-                                   "start the `tracker` node first")
+                raise HarnessError(f"no subscriber on {IMAGE_TOPIC} and {topics.TRACK_INIT} after "
+                                   f"{wait_s:.0f} s; start the `tracker` node first")
             _spin_for(node, 0.1)
         t_first = msgs[0][1]
         node.publish_clock(t_first)
-        node.init_pub.publish(mb.serialize(mb.roi_msg(first_gt)))
+        node.init_pub.publish(mb.serialize(box_to_roi(first_gt, width, height, ROSBAGS)))
         _spin_for(node, 0.5)
         log(f"replaying {len(msgs)} messages from {bag} at rate {rate}")
         start = time.monotonic()
@@ -121,9 +123,9 @@ def replay(bag: Path | str, out: Path | str, rate: float = 1.0, wait_s: float = 
     recorded = _write_recording(Path(out), received)
     boxes: dict[int, Box | None] = {}
     for topic, _, raw in received:
-        if topic == "/track/box":
-            m = mb.deserialize(raw, mb.POLYGON_STAMPED)
-            boxes[mb.stamp_to_ns(m.header.stamp)] = mb.polygon_to_box(m)
+        if topic == topics.TRACK_BOX:
+            m = mb.deserialize(raw, topics.TYPES[topics.TRACK_BOX])
+            boxes[msg_ns(m)] = box_from_polygon(m)
     stamps = sorted(gt_stamps)
     pred = [boxes.get(s) for s in stamps]
     pred[0] = gt_stamps[stamps[0]] if pred[0] is None else pred[0]
@@ -138,8 +140,7 @@ def _write_recording(out: Path, received: list[tuple[str, int, bytes]]) -> Path:
         raise HarnessError(f"{out} exists already; choose a new --out")
     ts = mb.typestore()
     with Writer(out, version=9, storage_plugin=StoragePlugin.SQLITE3) as w:
-        conns = {topic: w.add_connection(topic, msgtype, typestore=ts)
-                 for topic, (_, msgtype) in RECORDED.items()}
+        conns = {topic: w.add_connection(topic, topics.TYPES[topic], typestore=ts) for topic in RECORDED}
         last = 0
         for topic, t, raw in received:
             last = max(last, t)

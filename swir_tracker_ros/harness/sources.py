@@ -13,9 +13,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..errors import HarnessError
-from ..types import Box
-from .bagio import FrameRecord, read_frames, sequence_meta
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.bagio import FrameRecord, read_frames, sequence_meta
+from swir_tracker_ros.types import Box
 
 SYNTH_PREFIX = "synth:"
 T0_NS = 1_000_000_000  # stamp of frame 0 in bags we write (1 s after the epoch, never 0)
@@ -56,13 +56,13 @@ def open_source(spec: str | Path, max_frames: int | None = None, image_topic: st
                 gt_topic: str | None = None) -> Source:
     """`synth:NAME` (or a bare scenario name), a sequence folder with gt.txt, or a bag directory/file."""
     text = str(spec)
-    from ..scene import scenarios
+    from swir_tracker_ros.scene import scenarios
 
     if text.startswith(SYNTH_PREFIX) or (not Path(text).exists() and text in scenarios()):
         name = text.removeprefix(SYNTH_PREFIX)
         if name not in scenarios():
             raise HarnessError(f"unknown synthetic scenario {name!r}; `harness synth --list` names them")
-        from ..scene.scenarios import make_scenario
+        from swir_tracker_ros.scene.scenarios import make_scenario
 
         bits = make_scenario(name).world.sensor.bits
         return Source(name, "synth", name, 25.0, bits, max_frames)
@@ -138,7 +138,7 @@ def _sequence_frames(path: Path, fps: float, meta: dict) -> Iterator[FrameRecord
 
 
 def _synth_frames(name: str, fps: float) -> Iterator[FrameRecord]:
-    from ..scene.scenarios import make_scenario
+    from swir_tracker_ros.scene.scenarios import make_scenario
 
     run = make_scenario(name, fps=fps)
     for fr in run:

@@ -55,7 +55,7 @@ from swir_tracker_ros.kalman.influence import (
     make_influence,
 )
 from swir_tracker_ros.kalman.models import BoxModel, dcfca_box_model, kcf_box_model
-from swir_tracker_ros.kalman.robust import RobustInfo, RobustKalmanFilter, robust_update
+from swir_tracker_ros.kalman.robust import RobustKalmanFilter, robust_update
 from swir_tracker_ros.kalman.sequential import UpdateInfo
 from swir_tracker_ros.kalman.standard import KalmanFilter, predict, update
 from swir_tracker_ros.kalman.statlin import METHODS, alpha_fixed
@@ -74,7 +74,6 @@ __all__ = [
     "Huber",
     "Influence",
     "KalmanFilter",
-    "RobustInfo",
     "RobustKalmanFilter",
     "Smith",
     "ThresholdMap",

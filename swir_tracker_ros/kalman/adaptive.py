@@ -13,6 +13,7 @@ import numpy as np
 
 from swir_tracker_ros.errors import KalmanError, ParameterError
 from swir_tracker_ros.kalman.influence import HUBER_K, Huber, Influence
+from swir_tracker_ros.paramfield import validate_params
 
 
 @dataclass(frozen=True)
@@ -110,14 +111,10 @@ class AdaptiveNoiseParams:
                "residual of an optimal filter has covariance R - H P H')", "choices": ("thesis", "postfit")})
 
     def validate(self) -> None:
-        for name in ("n_d", "n_r", "warmup", "k", "floor"):
-            meta = type(self).__dataclass_fields__[name].metadata
-            v = getattr(self, name)
-            if not (meta["min"] <= v <= meta["max"]):
-                lo, hi = meta["min"], meta["max"]
-                raise ParameterError(f"AdaptiveNoiseParams.{name} = {v!r} is outside [{lo}, {hi}]")
-        if self.formula not in ("thesis", "postfit"):
-            raise ParameterError(f"AdaptiveNoiseParams.formula = {self.formula!r}: use 'thesis' or 'postfit'")
+        validate_params(self)
+
+    def check(self) -> None:
+        """Cross-field rule (run by `paramfield.validate_params` after the fields)."""
         if self.warmup < self.n_d:
             raise ParameterError(f"AdaptiveNoiseParams.warmup = {self.warmup} must be >= n_d = {self.n_d}")
 

@@ -14,14 +14,11 @@ from swir_tracker_ros.kalman.sequential import UpdateInfo, sequential_update
 from swir_tracker_ros.kalman.standard import KalmanFilter
 from swir_tracker_ros.kalman.statlin import METHODS
 
-RobustInfo = UpdateInfo
-"""Diagnostics of a robust update (weights, normalised residuals, threshold used, coasted flag)."""
-
 
 def robust_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, H: np.ndarray,
                   influence: Influence | None = None, robust_components: Sequence[int] | None = None,
                   method: str = "A2", alpha_f: float | None = None,
-                  threshold: float | None = None) -> tuple[np.ndarray, np.ndarray, RobustInfo]:
+                  threshold: float | None = None) -> tuple[np.ndarray, np.ndarray, UpdateInfo]:
     """M-robust measurement update, components processed sequentially as scalars.
 
     Per robust scalar component (paper 000 eq. 31-35; paper 001 eq. 11, 14, 19, 22, 23, 28):
@@ -30,7 +27,7 @@ def robust_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, H:
     A3: alpha = alpha_f (fixed), x = x + K d psi(u);  A4 (= paper 000 eq. 33-34): alpha = w, x = x + K eps;
     P = (I - K h) P (eq. 35 / 22) in a PSD-safe form (see `statlin.scalar_update`).
     Components not in ``robust_components`` (None: all) get the standard update (eq. 16-19).
-    ``influence`` defaults to Huber() (k = HUBER_K). Returns (x, P, RobustInfo); inputs are not modified.
+    ``influence`` defaults to Huber() (k = HUBER_K). Returns (x, P, UpdateInfo); inputs are not modified.
     """
     if influence is None:
         influence = Huber()

@@ -7,7 +7,6 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Image, JointState, RegionOfInterest
 from std_msgs.msg import UInt32
 from visualization_msgs.msg import MarkerArray
@@ -24,22 +23,32 @@ from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_roi, ego_shift
 from msg_adapters.image import image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
+from msg_adapters.qos import profile
+from msg_adapters.stamps import header_of
 from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros import topics
 from swir_tracker_ros.acquisition.descriptors import Appearance
 from swir_tracker_ros.acquisition.handoff import AutoInitialiser, TrackView, lost_candidates, select
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker
 from swir_tracker_ros.acquisition.params import AcquisitionParams
 from swir_tracker_ros.errors import AcquisitionError, ParameterError
 from swir_tracker_ros.nodes.graph import check_topic_names
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.types import Box, TrackState
 
 NODE_NAME = "acquisition"
 MOT_PREFIX = "mot."
-IMAGE_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
-SENSOR_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
-OUTPUT_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+
+
+PARAMS_FILE = ParamsFile(
+    "params/acquisition.yaml", "acquisition",
+    (("", AcquisitionParams, ""),
+     ("mot", MotParams, "association and life cycle (MotParams), declared as mot.<name>")),
+    "Parameters of the acquisition node (`acquisition`, docs/acquisition.md), every one at its default. "
+    + GENERATED + " swir_tracker_ros/acquisition/params.py and mot.py, not this file. Pixel values refer "
+    "to full-resolution image pixels.")
 
 
 class AcquisitionNode(Node):
@@ -60,17 +69,19 @@ class AcquisitionNode(Node):
         self.target_app: Appearance | None = None
         self.pose: tuple[float, float] | None = None
         self.prev_pose: tuple[float, float] | None = None
-        self.pub_tracks = self.create_publisher(MarkerArray, "/acquisition/tracks", OUTPUT_QOS)
-        self.pub_candidates = self.create_publisher(MarkerArray, "/acquisition/candidates", OUTPUT_QOS)
-        self.pub_init = self.create_publisher(RegionOfInterest, "/track/init", OUTPUT_QOS)
-        self.pub_debug = self.create_publisher(Image, "/acquisition/debug_image", OUTPUT_QOS)
+        output = profile(topics.RELIABLE)
+        self.pub_tracks = self.create_publisher(MarkerArray, topics.ACQUISITION_TRACKS, output)
+        self.pub_candidates = self.create_publisher(MarkerArray, topics.ACQUISITION_CANDIDATES, output)
+        self.pub_init = self.create_publisher(RegionOfInterest, topics.TRACK_INIT, output)
+        self.pub_debug = self.create_publisher(Image, topics.ACQUISITION_DEBUG_IMAGE, output)
         self.size = (0, 0)
-        self.create_subscription(Image, self.params.image_topic, self._guard(self._on_image), IMAGE_QOS)
+        self.create_subscription(Image, self.params.image_topic, self._guard(self._on_image),
+                                 profile(topics.LATEST))
         self.create_subscription(JointState, self.params.joint_states_topic, self._guard(self._on_joints),
-                                 SENSOR_QOS)
-        self.create_subscription(UInt32, "/acquisition/select", self._guard(self._on_select), OUTPUT_QOS)
-        self.create_subscription(DiagnosticArray, "/track/state", self._guard(self._on_track_state),
-                                 OUTPUT_QOS)
+                                 profile(topics.SENSOR))
+        self.create_subscription(UInt32, topics.ACQUISITION_SELECT, self._guard(self._on_select), output)
+        self.create_subscription(DiagnosticArray, topics.TRACK_STATE, self._guard(self._on_track_state),
+                                 output)
         self.get_logger().info(f"acquisition on {self.params.image_topic}: detector {self.params.detector}, "
                                f"siamese {'on' if self.mot_params.use_siamese else 'off'}, "
                                f"auto hand-off {'on' if self.params.auto_handoff else 'off'}")
@@ -107,6 +118,7 @@ class AcquisitionNode(Node):
 
     def _on_image(self, msg: Image) -> None:
         frame = image_to_numpy(msg).pixels
+        hdr = header_of(msg)
         height, width = frame.shape[:2]
         self.size = (width, height)
         shift = self._shift(width, height)
@@ -118,20 +130,20 @@ class AcquisitionNode(Node):
                 if v.id == self.target_id:
                     self.target_app = v.appearance
         boxes = [TrackBox(t.id, t.box, t.status.value) for t in tracks]
-        self.pub_tracks.publish(tracks_to_markers(boxes, msg.header))
+        self.pub_tracks.publish(tracks_to_markers(boxes, hdr))
         candidates: list[TrackBox] = []
         if self.tracker_state is TrackState.LOST and self.target_app is not None:
             by_id = {v.id: v for v in self.views}
             ranked = lost_candidates(self.target_app, self.views, self.mot.weights, self.params.candidates)
             candidates = [TrackBox(i, by_id[i].box, str(r), d) for r, (i, d) in enumerate(ranked, 1)]
-            self.pub_candidates.publish(tracks_to_markers(candidates, msg.header, CANDIDATES_NS))
+            self.pub_candidates.publish(tracks_to_markers(candidates, hdr, CANDIDATES_NS))
         if self.params.auto_handoff and not self.awaiting_tracker and self.tracker_state in (
                 TrackState.IDLE, TrackState.LOST):
             box = self.auto.step([d.box for d in dets])
             if box is not None:
                 self._hand_off(self._track_at(box), box)
         if self.params.publish_debug and self.pub_debug.get_subscription_count() > 0:
-            self.pub_debug.publish(render_tracks_debug(frame, boxes, msg.header, candidates, self.target_id))
+            self.pub_debug.publish(render_tracks_debug(frame, boxes, hdr, candidates, self.target_id))
 
     def _track_at(self, box: Box) -> int | None:
         best = max(self.views, key=lambda v: v.box.iou(box), default=None)
@@ -152,7 +164,8 @@ class AcquisitionNode(Node):
         box = select(self.views, track_id)
         if box is None:
             known = sorted(v.id for v in self.views)
-            self.get_logger().warning(f"/acquisition/select: no displayed track {track_id}; shown: {known}")
+            self.get_logger().warning(f"{topics.ACQUISITION_SELECT}: no displayed track {track_id}; "
+                                      f"shown: {known}")
             return
         self._hand_off(track_id, box)
 

@@ -31,6 +31,6 @@ def _entry(module: str) -> Callable[[], int]:
 
 tracker = _entry("swir_tracker_ros.nodes.tracker_node")
 positioner_bridge = _entry("swir_tracker_ros.nodes.positioner_node")
-scene_camera = _entry("swir_tracker_ros.nodes.scene_camera_node")
+scene_camera = _entry("swir_tracker_ros.simulation.scene_camera_node")
 acquisition = _entry("swir_tracker_ros.nodes.acquisition_node")
-pelco_sim = _entry("swir_tracker_ros.pelco.sim")
+pelco_sim = _entry("swir_tracker_ros.simulation.pelco_sim")

@@ -9,26 +9,25 @@ import time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
 from msg_adapters import diagnostics
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import pan_tilt_error_from_msg
 from msg_adapters.joint_state import PanTiltSample, pan_tilt_to_joint_state
+from msg_adapters.qos import profile
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError, PelcoError
 from swir_tracker_ros.nodes.graph import input_publishers
-from swir_tracker_ros.nodes.param_docs import usage_lines
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
 from swir_tracker_ros.pelco.bridge import PositionerBridge
 from swir_tracker_ros.pelco.params import PositionerParams
 
-ERROR_TOPIC = "/track/pan_tilt_error"
-STATE_TOPIC = "/track/state"
-JOINT_STATES_TOPIC = "/positioner/joint_states"
+ERROR_TOPIC, STATE_TOPIC = topics.PAN_TILT_ERROR, topics.TRACK_STATE
 STATUS_NAME = "swir_tracker/positioner"
 
 
@@ -40,11 +39,11 @@ class PositionerNode(Node):
         self.params = bind_parameters(self, PositionerParams, on_change=self._on_params)
         self.bridge = PositionerBridge(self.params, log=self._log, clock=time.monotonic)
         # Best effort accepts both reliable and best-effort publishers; only the latest error matters.
-        latest = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
-        self.create_subscription(Vector3Stamped, ERROR_TOPIC, self._on_error, latest)
-        self.create_subscription(DiagnosticArray, STATE_TOPIC, self._on_state, 10)
-        self.joint_pub = self.create_publisher(JointState, JOINT_STATES_TOPIC, 10)
-        self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.create_subscription(Vector3Stamped, ERROR_TOPIC, self._on_error, profile(topics.LATEST))
+        reliable = profile(topics.RELIABLE)
+        self.create_subscription(DiagnosticArray, STATE_TOPIC, self._on_state, reliable)
+        self.joint_pub = self.create_publisher(JointState, topics.JOINT_STATES, reliable)
+        self.diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, reliable)
         p = self.params
         tick = min(200.0, max(50.0, 2.0 * p.control_rate, 4.0 * p.feedback_rate))
         self.create_timer(1.0 / tick, self._tick)
@@ -118,6 +117,13 @@ def _stop_head(node: PositionerNode) -> None:
     sent = node.bridge.shutdown()
     print(f"positioner_bridge: stop {'written' if sent else 'NOT written (port unavailable)'} "
           "before closing the port", file=sys.stderr, flush=True)
+
+
+PARAMS_FILE = ParamsFile(
+    "params/positioner.yaml", "positioner_bridge", (("", PositionerParams, ""),),
+    "Parameters of the positioner bridge (`positioner_bridge`; docs/positioner.md: wiring and sign "
+    "conventions), every one at its default. " + GENERATED + " swir_tracker_ros/pelco/params.py, not this "
+    "file. Units: rad, rad/s, s, Hz, deg/s in the speed tables.")
 
 
 def usage() -> str:

@@ -81,11 +81,6 @@ def _coerce(kind: type, name: str, value: Any) -> Any:
     raise ParameterError(f"parameter {name} must be of type {kind.__name__}, got {value!r}")
 
 
-def check_metadata(params: Any, prefix: str = "") -> None:
-    """Raise `ParameterError` when a field breaks its metadata (`paramfield.validate_params`, ROS-free)."""
-    validate_params(params, prefix)
-
-
 def describe(f: dataclasses.Field, kind: type, name: str) -> ParameterDescriptor:
     """The ParameterDescriptor of one field: description (doc + choices), type, range, read-only flag."""
     meta = f.metadata
@@ -126,7 +121,7 @@ def _build(cls: type[P], values: dict[str, Any], prefix: str) -> P:
         params = _construct(cls, values)
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"parameters {prefix or cls.__name__} cannot be built: {exc}") from exc
-    check_metadata(params, prefix)
+    validate_params(params, prefix)
     validate = getattr(params, "validate", None)
     if callable(validate):
         try:

@@ -5,15 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-import textwrap
 import time
-import typing
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
@@ -25,11 +22,15 @@ from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_from_roi, box_to_polygon, ego_shift, pan_tilt_error, pan_tilt_to_msg
 from msg_adapters.image import image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
-from msg_adapters.stamps import stamp_to_seconds
+from msg_adapters.qos import profile
+from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
+from msg_adapters.trigger import trigger_reply
+from swir_tracker_ros import topics
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
-from swir_tracker_ros.nodes.param_docs import usage_lines
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
+from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node, user_arguments
 from swir_tracker_ros.nodes.tracker_node_params import (
@@ -45,11 +46,6 @@ from swir_tracker_ros.types import Box, TrackResult, TrackState
 NODE_NAME = "tracker"
 DIAG_NAME = "swir_tracker/tracker_node"
 TRACKER_PREFIX = "tracker."
-# Sensor-data QoS with a queue of one: the executor always takes the newest frame, never a backlog.
-IMAGE_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
-SENSOR_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
-OUTPUT_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
-DEBUG_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 ACTIVE = (TrackState.TRACKING, TrackState.OCCLUDED)
 
 class TrackerNode(Node):
@@ -77,17 +73,19 @@ class TrackerNode(Node):
         self.window_start = time.monotonic()
         self._warned: dict[str, tuple[float, int]] = {}  # kind -> (time of the last warning, held back)
         p = self.params
-        self.pub_box = self.create_publisher(PolygonStamped, "/track/box", OUTPUT_QOS)
-        self.pub_error = self.create_publisher(Vector3Stamped, "/track/pan_tilt_error", OUTPUT_QOS)
-        self.pub_state = self.create_publisher(DiagnosticArray, "/track/state", OUTPUT_QOS)
-        self.pub_debug = self.create_publisher(Image, "/track/debug_image", DEBUG_QOS)
-        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
+        output, sensor = profile(topics.RELIABLE), profile(topics.SENSOR)
+        self.pub_box = self.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
+        self.pub_error = self.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
+        self.pub_state = self.create_publisher(DiagnosticArray, topics.TRACK_STATE, output)
+        self.pub_debug = self.create_publisher(Image, topics.TRACK_DEBUG_IMAGE, profile(topics.DEBUG_IMAGE))
+        self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, output)
         guard = self._guard
-        self.create_subscription(Image, p.image_topic, guard(self._on_image), IMAGE_QOS)
-        self.create_subscription(CameraInfo, p.camera_info_topic, guard(self._on_camera_info), SENSOR_QOS)
-        self.create_subscription(JointState, p.joint_states_topic, guard(self._on_joint_state), SENSOR_QOS)
-        self.create_subscription(RegionOfInterest, "/track/init", guard(self._on_init), OUTPUT_QOS)
-        self.create_service(Trigger, "/track/cancel", self._on_cancel)
+        # a queue of one: the executor always takes the newest frame, never a backlog
+        self.create_subscription(Image, p.image_topic, guard(self._on_image), profile(topics.LATEST))
+        self.create_subscription(CameraInfo, p.camera_info_topic, guard(self._on_camera_info), sensor)
+        self.create_subscription(JointState, p.joint_states_topic, guard(self._on_joint_state), sensor)
+        self.create_subscription(RegionOfInterest, topics.TRACK_INIT, guard(self._on_init), output)
+        self.create_service(Trigger, topics.TRACK_CANCEL, self._on_cancel)
         self.diag_timer = self.create_timer(p.diagnostics_period_s, self._guard(self._publish_diagnostics))
         self.get_logger().info(f"tracking {p.image_topic} with {self.tracker_params.pipeline}/"
                                f"{self.tracker_params.variant}; init box: {p.init_box or 'none'}")
@@ -118,7 +116,8 @@ class TrackerNode(Node):
     def _on_image(self, msg: Image) -> None:
         t_recv = time.perf_counter()
         self.stats.received += 1
-        stamp = stamp_to_seconds(msg.header.stamp)
+        hdr = header_of(msg)
+        stamp = stamp_to_seconds(hdr.stamp)
         if self._is_stale(stamp):
             self.stats.stale += 1
             return
@@ -138,7 +137,7 @@ class TrackerNode(Node):
         height, width = pixels.shape[:2]
         skip = frame_problem(pixels) or self._check_format(pixels)
         if skip:
-            self._skip(msg.header, skip)
+            self._skip(hdr, skip)
             return
         intr = self._intrinsics(width, height)
         shift = self._ego_shift(stamp, intr)
@@ -146,9 +145,9 @@ class TrackerNode(Node):
         t_core = time.perf_counter()
         result = self._track(pixels, shift, hint, elapsed)
         core_ms = (time.perf_counter() - t_core) * 1e3
-        self._publish(msg.header, result, intr)
+        self._publish(hdr, result, intr)
         if self.pub_debug.get_subscription_count() > 0:
-            self.pub_debug.publish(render_debug(pixels, result, msg.header))
+            self.pub_debug.publish(render_debug(pixels, result, hdr))
         now = time.perf_counter()
         self.stats.processed += 1
         self.stats.latency_ms.append((now - t_recv) * 1e3)
@@ -175,7 +174,7 @@ class TrackerNode(Node):
         try:
             self.pending_init = box_from_roi(msg)
         except MessageError as exc:
-            self._warn("init", f"ignoring /track/init: {exc}")
+            self._warn("init", f"ignoring {topics.TRACK_INIT}: {exc}")
             return
         self.get_logger().info(f"target selected: {self.pending_init.as_tuple()} (starts on the next frame)")
 
@@ -186,10 +185,9 @@ class TrackerNode(Node):
         self._restart = None
         self.last_box = None
         self.last_result = None
-        response.success = True
-        response.message = f"tracking cancelled (state was {was})"
-        self.get_logger().info(response.message)
-        return response
+        text = f"tracking cancelled (state was {was})"
+        self.get_logger().info(text)
+        return trigger_reply(response, True, text)
 
     def _on_node_params(self, params: TrackerNodeParams) -> None:
         if params.init_box and params.init_box != self.params.init_box:
@@ -361,47 +359,19 @@ def usage() -> str:
     return "\n".join(lines)
 
 
-def _yaml_value(value: object) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, list):
-        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
-    return repr(value)
-
-
-def _yaml_fields(cls: type, indent: int) -> list[str]:
-    """Documented `name: default` lines of a params dataclass; a nested dataclass becomes a YAML block."""
-    lines: list[str] = []
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        meta = f.metadata
-        doc = str(meta.get("doc", ""))
-        if dataclasses.is_dataclass(hints[f.name]):
-            lines.append(" " * indent + f"{f.name}:  # {doc}")
-            lines += _yaml_fields(hints[f.name], indent + 2)
-            continue
-        if "choices" in meta:
-            doc += f" {{{', '.join(map(str, meta['choices']))}}}"
-        elif "min" in meta or "max" in meta:
-            doc += f" [{meta.get('min', '-inf')}, {meta.get('max', 'inf')}]"
-        lines += [" " * indent + "# " + part for part in textwrap.wrap(doc, 104 - indent)]
-        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        lines.append(" " * indent + f"{f.name}: {_yaml_value(default)}")
-    return lines
+PARAMS_FILE = ParamsFile(
+    "params/tracker.yaml", "/**",
+    (("", TrackerNodeParams, ""),
+     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
+    "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
+    + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
+    "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "
+    "Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml")
 
 
 def params_yaml() -> str:
     """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
-    lines = ["# Parameters of the `tracker` node (docs/tracker_node.md); `tracker --params-yaml` regenerates",
-             "# this file with the defaults. Ranges are enforced; invalid runtime changes are rejected.",
-             "# Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml",
-             "/**:", "  ros__parameters:"]
-    lines += _yaml_fields(TrackerNodeParams, 4)
-    lines.append("    tracker:  # the tracking core (swir_tracker_ros.tracker.TrackerParams)")
-    lines += _yaml_fields(TrackerParams, 6)
-    return "\n".join(lines) + "\n"
+    return render_params_file(PARAMS_FILE)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,44 +10,49 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.paramfield import param, validate_params
 
 
 @dataclass
 class TrackerNodeParams:
     """Node-only parameters (the tracking core's own parameters are bound under `tracker.`)."""
 
-    image_topic: str = field(default="/camera/image_raw", metadata={
-        "doc": "Input sensor_msgs/Image topic (sensor-data QoS, depth 1).", "read_only": True})
-    camera_info_topic: str = field(default="/camera/camera_info", metadata={
-        "doc": "Optional sensor_msgs/CameraInfo topic; its K gives the focal lengths.", "read_only": True})
-    joint_states_topic: str = field(default="/positioner/joint_states", metadata={
-        "doc": "sensor_msgs/JointState of the head (joints pan, tilt in rad) for ego-motion.",
-        "read_only": True})
-    use_camera_info: bool = field(default=True, metadata={
-        "doc": "Use CameraInfo intrinsics when received; otherwise (or when false) the FOV fallback."})
-    fov_h_deg: float = field(default=8.0, metadata={
-        "doc": "Horizontal field of view (deg) for the pinhole fallback without CameraInfo.",
-        "min": 0.1, "max": 179.0})
-    fov_v_deg: float = field(default=0.0, metadata={
-        "doc": "Vertical field of view (deg) for the fallback; 0 means square pixels (fy = fx).",
-        "min": 0.0, "max": 179.0})
-    init_box: list[float] = field(default_factory=list, metadata={
-        "doc": "Box x, y, w, h (full-resolution pixels) that starts tracking on the next frame; [] = none."})
-    bit_depth: int = field(default=0, metadata={
-        "doc": "Significant bits of 16-bit images (10, 12, 14); 0 = the full 16-bit container.",
-        "min": 0, "max": 16})
-    ego_motion_compensation: bool = field(default=True, metadata={
-        "doc": "Shift the core's prediction by the image motion the head caused since the previous frame."})
-    max_frame_age_s: float = field(default=0.0, metadata={
-        "doc": "Drop frames whose header stamp is older than this against the node clock; 0 = no limit.",
-        "min": 0.0, "max": 60.0})
-    diagnostics_period_s: float = field(default=1.0, metadata={
-        "doc": "Period of the /diagnostics report (rate, latency, drops).", "min": 0.1, "max": 60.0})
-    warn_throttle_s: float = field(default=5.0, metadata={
-        "doc": "Minimum interval between repeated warnings about bad input.", "min": 0.0, "max": 3600.0})
+    image_topic: str = param(
+        topics.IMAGE, "Input sensor_msgs/Image topic (sensor-data QoS, depth 1).", read_only=True)
+    camera_info_topic: str = param(
+        topics.CAMERA_INFO,
+        "Optional sensor_msgs/CameraInfo topic; its K gives the focal lengths.", read_only=True)
+    joint_states_topic: str = param(
+        topics.JOINT_STATES,
+        "sensor_msgs/JointState of the head (joints pan, tilt in rad) for ego-motion.", read_only=True)
+    use_camera_info: bool = param(
+        True, "Use CameraInfo intrinsics when received; otherwise (or when false) the FOV fallback.")
+    fov_h_deg: float = param(
+        8.0, "Horizontal field of view (deg) for the pinhole fallback without CameraInfo.", 0.1, 179.0)
+    fov_v_deg: float = param(
+        0.0, "Vertical field of view (deg) for the fallback; 0 means square pixels (fy = fx).", 0.0, 179.0)
+    init_box: list[float] = param(
+        [], "Box x, y, w, h (full-resolution pixels) that starts tracking on the next frame; [] = none.")
+    bit_depth: int = param(
+        0, "Significant bits of 16-bit images (10, 12, 14); 0 = the full 16-bit container.", 0, 16)
+    ego_motion_compensation: bool = param(
+        True, "Shift the core's prediction by the image motion the head caused since the previous frame.")
+    max_frame_age_s: float = param(
+        0.0,
+        "Drop frames whose header stamp is older than this against the node clock; 0 = no limit.", 0.0, 60.0)
+    diagnostics_period_s: float = param(
+        1.0, "Period of the /diagnostics report (rate, latency, drops).", 0.1, 60.0)
+    warn_throttle_s: float = param(
+        5.0, "Minimum interval between repeated warnings about bad input.", 0.0, 3600.0)
 
     def validate(self) -> None:
+        """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`)."""
+        validate_params(self)
+
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
         if self.init_box:
             if len(self.init_box) != 4:
                 raise ParameterError(f"parameter init_box must be [] or x, y, w, h; got {self.init_box}")

@@ -198,10 +198,6 @@ def set_tilt_position(address: int, raw: int) -> bytes:
     return _word(SET_TILT_POSITION, address, raw, "tilt position")
 
 
-def set_zoom_position(address: int, raw: int) -> bytes:
-    return _word(SET_ZOOM_POSITION, address, raw, "zoom position")
-
-
 def query(address: int, what: str) -> bytes:
     cmd2 = {"pan": QUERY_PAN, "tilt": QUERY_TILT, "zoom": QUERY_ZOOM}.get(what)
     if cmd2 is None:

@@ -51,15 +51,28 @@ Scenarios (``scenarios.py``)
     ``frame(k) -> SceneFrame(index, t, image, truths, target, view)`` (``target`` None when out of view,
     ``occluded`` = the per-frame occlusion flag); iterating a run yields every frame.
     ``crowd_world(seed, n=12, thermal=True, ...)``: ids 1..n pedestrians wandering over a wide area;
-    ``demo_world(seed)``: the closed-loop demo world. The acquisition crowd scenes
-    (``acquisition/crowd.py``) stage their crossings with these actors, textures and sensor model.
+    ``demo_world(seed)``: the closed-loop demo world.
+
+Crowd scenes (``crowd.py``, imported on its own: ``from swir_tracker_ros.scene import crowd``)
+    The acquisition tests' and benchmarks' thermal crowds, staged in image columns with these actors,
+    textures and sensor model, plus a detector stand-in; a fixture, not runtime acquisition code.
 """
 
 from __future__ import annotations
 
-from .actors import Leg, Path, Pedestrian, StaticOccluder, Vehicle, bush, pole, tree, wall
-from .camera import CameraView
-from .scenarios import (
+from swir_tracker_ros.scene.actors import (
+    Leg,
+    Path,
+    Pedestrian,
+    StaticOccluder,
+    Vehicle,
+    bush,
+    pole,
+    tree,
+    wall,
+)
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.scenarios import (
     TARGET_ID,
     ScenarioRun,
     ScenarioSpec,
@@ -69,9 +82,9 @@ from .scenarios import (
     make_scenario,
     scenarios,
 )
-from .sensor import SensorModel
-from .texture import Look, Panorama, make_panorama
-from .world import Truth, World
+from swir_tracker_ros.scene.sensor import SensorModel
+from swir_tracker_ros.scene.texture import Look, Panorama, make_panorama
+from swir_tracker_ros.scene.world import Truth, World
 
 __all__ = [
     "TARGET_ID", "CameraView", "Leg", "Look", "Panorama", "Path", "Pedestrian", "ScenarioRun", "ScenarioSpec",

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from .scenarios import make_scenario, scenarios
+from swir_tracker_ros.scene.scenarios import make_scenario, scenarios
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -9,7 +9,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .texture import Look, Sprite, occluder_sprite, pedestrian_sprites, vehicle_sprite
+from swir_tracker_ros.scene.texture import Look, Sprite, occluder_sprite, pedestrian_sprites, vehicle_sprite
 
 
 @dataclass(frozen=True)

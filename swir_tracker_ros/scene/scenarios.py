@@ -9,11 +9,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .actors import Leg, Path, Pedestrian, Vehicle, bush, pole, tree, wall
-from .camera import CameraView
-from .sensor import SensorModel
-from .texture import Look, make_panorama
-from .world import Truth, World
+from swir_tracker_ros.errors import SceneError
+from swir_tracker_ros.scene.actors import Leg, Path, Pedestrian, Vehicle, bush, pole, tree, wall
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.sensor import SensorModel
+from swir_tracker_ros.scene.texture import Look, make_panorama
+from swir_tracker_ros.scene.world import Truth, World
 
 TARGET_ID = 1
 TILT = math.radians(-0.75)
@@ -99,7 +100,7 @@ def make_scenario(name: str, seed: int | None = None, fps: float = 25.0) -> Scen
     """Build scenario `name` (see `scenarios()`); the same seed always gives the same frames."""
     specs = scenarios()
     if name not in specs:
-        raise KeyError(f"unknown scenario {name!r}; known: {', '.join(specs)}")
+        raise SceneError(f"unknown scenario {name!r}; known: {', '.join(specs)}")
     spec = specs[name]
     s = spec.default_seed if seed is None else seed
     world = spec.build(s)

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from swir_tracker_ros.errors import SceneError
+
 
 def fractal_noise(rng: np.random.Generator, height: int, width: int, octaves: int = 5,
                   base_cells: int = 4, persistence: float = 0.55) -> np.ndarray:
@@ -205,5 +207,5 @@ def occluder_sprite(kind: str, look: Look, seed: int, aspect: float, h: int = 20
             alpha[int(trunk_top * h):, w // 2 - tw:w // 2 + tw] = 1.0
         rad = np.where(alpha > 0, look.upper + look.texture * canopy, rad)
     else:
-        raise ValueError(f"unknown occluder kind {kind!r}")
+        raise SceneError(f"unknown occluder kind {kind!r}")
     return _mip(np.clip(rad, 0, 1).astype(np.float32), alpha)

@@ -10,11 +10,12 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..types import Box
-from .actors import Pedestrian, Placement, StaticOccluder, Vehicle
-from .camera import CameraView
-from .sensor import SensorModel, SensorPattern, apply_sensor, make_pattern, shake_offset
-from .texture import Panorama
+from swir_tracker_ros.errors import SceneError
+from swir_tracker_ros.scene.actors import Pedestrian, Placement, StaticOccluder, Vehicle
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.sensor import SensorModel, SensorPattern, apply_sensor, make_pattern, shake_offset
+from swir_tracker_ros.scene.texture import Panorama
+from swir_tracker_ros.types import Box
 
 Object = Pedestrian | Vehicle | StaticOccluder
 
@@ -73,7 +74,7 @@ class World:
         for o in self.objects:
             if not isinstance(o, StaticOccluder) and o.id == obj_id:
                 return o
-        raise KeyError(f"no object with id {obj_id}")
+        raise SceneError(f"no object with id {obj_id}")
 
     def angles(self, p: Placement) -> tuple[float, float, float, float, float]:
         """(azimuth of the centre, half angular width, elevation of top, elevation of bottom, range)."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from swir_tracker_ros.errors import SceneError
 from swir_tracker_ros.scene.actors import Leg, Path, Pedestrian, Vehicle, pole, tree, wall
 from swir_tracker_ros.scene.scenarios import TARGET_ID as SCENARIO_TARGET_ID
 from swir_tracker_ros.scene.scenarios import scenarios
@@ -82,7 +83,7 @@ def demo_world(seed: int = 7, bits: int = 16, fps: float = 25.0, variant: str = 
     textures, the background and the noise, never the paths.
     """
     if variant not in VARIANTS:
-        raise ValueError(f"unknown demo variant {variant!r}; known: {', '.join(VARIANTS)}")
+        raise SceneError(f"unknown demo variant {variant!r}; known: {', '.join(VARIANTS)}")
     panorama = make_panorama(seed, az_span_deg=60.0, el_min_deg=-9.0, el_max_deg=5.0)
     legs, wall_width = TARGET_LEGS, 1.2
     look = Look(head=0.62, upper=0.2, lower=0.14, texture=0.05)
@@ -138,7 +139,7 @@ def build_scene(name: str, seed: int, bits: int = 16, fps: float = 25.0) -> Buil
                           TARGET_ID)
     specs = scenarios()
     if name not in specs:
-        raise ValueError(f"unknown scene {name!r}; known: {', '.join(scene_names())}")
+        raise SceneError(f"unknown scene {name!r}; known: {', '.join(scene_names())}")
     world = specs[name].build(seed)
     world.sensor = replace(world.sensor, bits=bits, fps=fps)
     return BuiltScene(name, world, specs[name].duration_s, SCENARIO_TARGET_ID)
@@ -149,7 +150,7 @@ class SceneClock:
 
     def __init__(self, duration_s: float, started_at: float | None = None) -> None:
         if not (duration_s > 0 and math.isfinite(duration_s)):
-            raise ValueError(f"scene duration must be a positive number of seconds, got {duration_s}")
+            raise SceneError(f"scene duration must be a positive number of seconds, got {duration_s}")
         self.duration_s = duration_s
         self.started_at = started_at
 

@@ -10,61 +10,42 @@ import time
 from pathlib import Path
 
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
-from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
 from std_srvs.srv import Trigger
 
+from msg_adapters.backend import RCLPY
 from msg_adapters.camera_info import intrinsics_from_camera_info
+from msg_adapters.diagnostics import statuses
 from msg_adapters.errors import MessageError
-from msg_adapters.geometry import box_from_polygon, box_to_roi, pan_tilt_error_from_msg
-from msg_adapters.ground_truth import ground_truth_state_values
+from msg_adapters.geometry import box_from_polygon, box_from_roi, box_to_roi, pan_tilt_error_from_msg
+from msg_adapters.ground_truth import ground_truth_state_values, scene_start_time
+from msg_adapters.image import image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
-from msg_adapters.stamps import stamp_to_seconds
+from msg_adapters.qos import profile
+from msg_adapters.stamps import msg_seconds, serialized_seconds
 from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros import topics
 from swir_tracker_ros.demo.recording import RECORDED_TOPICS, BagRecorder, RunRecords
 from swir_tracker_ros.demo.video import VideoSink, caption
 from swir_tracker_ros.nodes.graph import reported_publishers
-from swir_tracker_ros.nodes.scene_camera_node import GROUND_TRUTH_STATE
 
 # Before the track is initialised every process must have discovered the publishers of its inputs (as it
 # reports on /diagnostics): the supervisor's own view of the graph says nothing about whether, say, the
 # bridge has found the tracker's error stream yet, and DDS discovery between two processes can lag the
 # others by seconds (the head then stood still for the first 2.4 s of a run).
 WIRING = (
-    ("swir_tracker/positioner", "/track/pan_tilt_error"),
-    ("swir_tracker/positioner", "/track/state"),
-    ("swir_tracker/tracker_node", "/camera/image_raw"),
-    ("swir_tracker/tracker_node", "/positioner/joint_states"),
-    ("swir_tracker/scene_camera", "/positioner/joint_states"),
+    ("swir_tracker/positioner", topics.PAN_TILT_ERROR),
+    ("swir_tracker/positioner", topics.TRACK_STATE),
+    ("swir_tracker/tracker_node", topics.IMAGE),
+    ("swir_tracker/tracker_node", topics.JOINT_STATES),
+    ("swir_tracker/scene_camera", topics.JOINT_STATES),
 )
-
-# Every publisher in the demo graph is reliable (scene_camera's images too), so nothing is lost to the
-# fragmentation of large images over best-effort transport.
-RECORD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
-IMAGE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-TYPES = {
-    "sensor_msgs/msg/Image": Image, "sensor_msgs/msg/CameraInfo": CameraInfo,
-    "geometry_msgs/msg/PolygonStamped": PolygonStamped, "geometry_msgs/msg/Vector3Stamped": Vector3Stamped,
-    "diagnostic_msgs/msg/DiagnosticArray": DiagnosticArray, "sensor_msgs/msg/JointState": JointState,
-    "sensor_msgs/msg/RegionOfInterest": RegionOfInterest,
-}
 
 
 def _box(box) -> list[float] | None:
     return None if box is None else [box.x, box.y, box.w, box.h]
-
-
-def debug_frame(msg: Image):
-    """bgr8 / mono8 debug image -> numpy BGR (row padding honoured)."""
-    from msg_adapters.image import image_to_numpy
-
-    frame, _bits = image_to_numpy(msg)
-    return frame
 
 
 def init_answered(first_init_stamp: float, state: str, state_stamp: float) -> bool:
@@ -108,101 +89,99 @@ class DemoSupervisor(Node):
         self.scene_times: dict[float, float] = {}  # frame stamp -> scene time, recent frames
         self.last_debug_stamp: float | None = None
         self._skip_images = not args.bag_images
+        # Every publisher in the demo graph is reliable (scene_camera's images too), so nothing is lost to the
+        # fragmentation of large images over best-effort transport.
         for topic, type_name in RECORDED_TOPICS.items():
-            if topic == "/track/init":
+            if topic == topics.TRACK_INIT:
                 continue  # recorded as published by this node
-            if topic == "/camera/image_raw" and self._skip_images:
+            if topic == topics.IMAGE and self._skip_images:
                 # Not recorded: do not take a 0.6 MB reliable copy of every frame from the camera (its CPU
                 # is the tracker's on a small machine); the frame stamps come from /camera/camera_info,
                 # which the camera publishes with the same header for every image.
                 continue
-            qos = IMAGE_QOS if type_name == "sensor_msgs/msg/Image" else RECORD_QOS
-            self.create_subscription(TYPES[type_name], topic, self._make_cb(topic), qos, raw=True)
+            qos = profile(topics.RECORD_IMAGE if type_name == topics.TYPES[topics.IMAGE] else topics.RECORD)
+            self.create_subscription(RCLPY.cls(type_name), topic, self._make_cb(topic), qos, raw=True)
         if self.video is not None:
-            self.create_subscription(Image, "/track/debug_image", self._on_debug, IMAGE_QOS, raw=True)
-        self.init_pub = self.create_publisher(RegionOfInterest, "/track/init", 1)
-        self.start_client = self.create_client(Trigger, "/scene/start")
+            debug = topics.TRACK_DEBUG_IMAGE
+            self.create_subscription(RCLPY.cls(topics.TYPES[debug]), debug, self._on_debug,
+                                     profile(topics.RECORD_IMAGE), raw=True)
+        self.init_pub = self.create_publisher(RCLPY.cls(topics.TYPES[topics.TRACK_INIT]), topics.TRACK_INIT,
+                                              profile(topics.RELIABLE))
+        self.start_client = self.create_client(Trigger, topics.SCENE_START)
         self.timer = self.create_timer(0.05, self._tick)
 
     # ---------------------------------------------------------------- recording
     def _make_cb(self, topic: str):
-        msg_type = TYPES[RECORDED_TOPICS[topic]]
+        msg_type = RCLPY.cls(RECORDED_TOPICS[topic])
 
         def cb(data: bytes) -> None:
             now = time.time()
-            if self.bag is not None and not (topic == "/camera/image_raw" and self._skip_images):
+            if self.bag is not None and not (topic == topics.IMAGE and self._skip_images):
                 self.bag.write(topic, int(now * 1e9), data)
-            if topic == "/camera/image_raw":
-                self._on_frame_raw(data, now)
-                return
             try:
+                if topic == topics.IMAGE:  # only the stamp is needed: not worth decoding the frame
+                    self.rec.frames.append([serialized_seconds(data), now])
+                    return
                 self._on_message(topic, deserialize_message(data, msg_type), now)
             except MessageError as exc:
                 self.get_logger().warning(f"{topic}: {exc}", throttle_duration_sec=5.0)
 
         return cb
 
-    def _on_frame_raw(self, data: bytes, now: float) -> None:
-        # Only the header is needed: decode the stamp from the CDR bytes (4-byte encapsulation + sec + nsec).
-        sec = int.from_bytes(data[4:8], "little", signed=True)
-        nsec = int.from_bytes(data[8:12], "little", signed=False)
-        self.rec.frames.append([sec + nsec * 1e-9, now])
-
     def _on_message(self, topic: str, msg, now: float) -> None:
-        if topic == "/ground_truth/box":
+        if topic == topics.GROUND_TRUTH_BOX:
             box = box_from_polygon(msg)
-            stamp = stamp_to_seconds(msg.header.stamp)
+            stamp = msg_seconds(msg)
             self.rec.gt.append([stamp, _box(box)])
             self.latest_gt, self.latest_gt_stamp = box, stamp
-        elif topic == GROUND_TRUTH_STATE:
+        elif topic == topics.GROUND_TRUTH_STATE:
             v = ground_truth_state_values(msg)
             if v is not None:
-                stamp = stamp_to_seconds(msg.header.stamp)
+                stamp = msg_seconds(msg)
                 self.scene_t = v["scene_time"]
                 self.rec.truth.append([stamp, v["scene_time"], v["in_view"], v["visible"],
                                        v["pan_error"], v["tilt_error"], v["head_pan"], v["head_tilt"]])
                 self.scene_times[round(stamp, 4)] = v["scene_time"]
                 if len(self.scene_times) > 500:
                     self.scene_times.pop(next(iter(self.scene_times)))
-        elif topic == "/track/box":
-            self.rec.track.append([stamp_to_seconds(msg.header.stamp), now, _box(box_from_polygon(msg))])
-        elif topic == "/track/pan_tilt_error":
+        elif topic == topics.TRACK_BOX:
+            self.rec.track.append([msg_seconds(msg), now, _box(box_from_polygon(msg))])
+        elif topic == topics.PAN_TILT_ERROR:
             pan, tilt, stamp = pan_tilt_error_from_msg(msg)
             self.rec.error.append([stamp, now, pan, tilt])
-        elif topic == "/track/state":
+        elif topic == topics.TRACK_STATE:
             state = track_state_from_msg(msg).value
-            stamp = stamp_to_seconds(msg.header.stamp)
+            stamp = msg_seconds(msg)
             self.rec.state.append([stamp, now, state])
             self.latest_state, self.latest_state_stamp = state, stamp
-        elif topic == "/positioner/joint_states":
+        elif topic == topics.JOINT_STATES:
             pan, tilt, stamp = joint_state_to_pan_tilt(msg)
             self.rec.joints.append([stamp, now, pan, tilt])
             self.joints_seen = True
-        elif topic == "/camera/camera_info" and self._skip_images:
-            self.rec.frames.append([stamp_to_seconds(msg.header.stamp), now])
-        if topic == "/camera/camera_info" and not self.rec.camera:
+        elif topic == topics.CAMERA_INFO and self._skip_images:
+            self.rec.frames.append([msg_seconds(msg), now])
+        if topic == topics.CAMERA_INFO and not self.rec.camera:
             intr = intrinsics_from_camera_info(msg)
             self.rec.camera = {"width": intr.width, "height": intr.height, "fx": intr.fx, "fy": intr.fy,
                                "cx": intr.cx, "cy": intr.cy}
-        elif topic == "/diagnostics":
-            for status in msg.status:
-                values = {kv.key: kv.value for kv in status.values}
-                self.rec.diagnostics.append({"recv": now, "name": status.name, "values": values})
-                self.reports[status.name] = values
+        elif topic == topics.DIAGNOSTICS:
+            for name, values in statuses(msg):
+                self.rec.diagnostics.append({"recv": now, "name": name, "values": values})
+                self.reports[name] = values
 
     def _on_debug(self, data: bytes) -> None:
         if self.video is None or self.phase not in ("init", "start", "run"):
             return
         try:
-            msg = deserialize_message(data, Image)
-            frame = debug_frame(msg)
+            msg = deserialize_message(data, RCLPY.cls(topics.TYPES[topics.TRACK_DEBUG_IMAGE]))
+            frame = image_to_numpy(msg).pixels  # bgr8 (mono8 stays 2-D), row padding honoured
+            stamp = msg_seconds(msg)
         except MessageError as exc:
-            self.get_logger().warning(f"/track/debug_image: {exc}", throttle_duration_sec=5.0)
+            self.get_logger().warning(f"{topics.TRACK_DEBUG_IMAGE}: {exc}", throttle_duration_sec=5.0)
             return
-        t = self.scene_times.get(round(stamp_to_seconds(msg.header.stamp), 4), self.scene_t)
+        t = self.scene_times.get(round(stamp, 4), self.scene_t)
         mode = "ego-motion compensation ON" if self.args.ego else "ego-motion compensation OFF"
         frame = caption(frame, f"scene t = {t:5.2f} s   {mode}")
-        stamp = stamp_to_seconds(msg.header.stamp)
         # Repeat frames over the gap since the last one: the video plays in real time at any tracker rate.
         gap = 0.0 if self.last_debug_stamp is None else stamp - self.last_debug_stamp
         repeat = round(gap * self.args.fps)
@@ -259,14 +238,14 @@ class DemoSupervisor(Node):
                 self._publish_init(now)
         elif self.phase == "start":
             if self.start_future is not None and self.start_future.done():
-                result = self.start_future.result()
-                if result is None or not result.success:
-                    self._fail(f"/scene/start refused: {getattr(result, 'message', 'no response')}")
+                try:
+                    self.rec.scene_start = scene_start_time(self.start_future.result())
+                except MessageError as exc:
+                    self._fail(str(exc))
                     return
-                self.rec.scene_start = float(result.message.split()[-1])
                 self._set_phase("run")
             elif waited > 5.0:
-                self._fail("/scene/start did not answer within 5 s")
+                self._fail(f"{topics.SCENE_START} did not answer within 5 s")
         elif self.phase == "run" and now - self.rec.scene_start >= self.args.duration:
             self.rec.outcome = "completed"
             self.done = True
@@ -280,12 +259,16 @@ class DemoSupervisor(Node):
         if self.bag is not None:
             from rclpy.serialization import serialize_message
 
-            self.bag.write("/track/init", int(now * 1e9), serialize_message(roi))
+            self.bag.write(topics.TRACK_INIT, int(now * 1e9), serialize_message(roi))
         if math.isnan(self.rec.init_time):  # the first init's frame (see `init_answered`)
             self.rec.init_time = self.latest_gt_stamp
-        self.rec.init_box = [float(roi.x_offset), float(roi.y_offset), float(roi.width), float(roi.height)]
         self.last_init_pub = now
-        self.get_logger().info(f"/track/init {self.rec.init_box} from ground truth")
+        try:
+            self.rec.init_box = list(box_from_roi(roi).as_tuple())
+        except MessageError as exc:  # the ground truth box lies outside the image: the tracker refuses it
+            self.get_logger().warning(f"{topics.TRACK_INIT}: {exc}", throttle_duration_sec=5.0)
+            return
+        self.get_logger().info(f"{topics.TRACK_INIT} {self.rec.init_box} from ground truth")
 
     def finish(self) -> None:
         """Close the bag and the video and write records.json (also after an interrupt)."""

@@ -6,12 +6,11 @@ from __future__ import annotations
 import math
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PolygonStamped
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image, JointState
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
@@ -20,61 +19,68 @@ from msg_adapters import diagnostics
 from msg_adapters.camera_info import Intrinsics, camera_info_from_intrinsics
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_polygon
-from msg_adapters.ground_truth import ground_truth_state_msg
+from msg_adapters.ground_truth import ground_truth_state_msg, scene_start_reply
 from msg_adapters.image import numpy_to_image
 from msg_adapters.joint_state import joint_state_to_sample
+from msg_adapters.qos import profile
 from msg_adapters.stamps import header as make_header
-from swir_tracker_ros.demo.world import SceneClock, build_scene, scene_names
+from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import input_publishers
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node
+from swir_tracker_ros.paramfield import param, validate_params
 from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_scene import SceneClock, build_scene, scene_names
 from swir_tracker_ros.scene.world import Truth
 
-CAMERA_QOS = QoSProfile(depth=2, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
-GROUND_TRUTH_STATE = "/ground_truth/state"
 STATUS_NAME = "swir_tracker/scene_camera"
-JOINT_STATES_TOPIC = "/positioner/joint_states"
 
 
 @dataclass
 class SceneCameraParams:
     """Parameters of the `scene_camera` node (params/scene_camera.yaml)."""
 
-    scene: str = field(default="demo", metadata={
-        "doc": "world to render: 'demo' (the closed-loop demo scene) or a harness scenario name"})
-    seed: int = field(default=7, metadata={"doc": "scene seed (same seed, same scene)", "min": 0,
-                                           "max": 2**31 - 1})
-    width: int = field(default=576, metadata={"doc": "image width, pixels", "min": 16, "max": 4096})
-    height: int = field(default=504, metadata={"doc": "image height, pixels", "min": 16, "max": 4096})
-    fps: float = field(default=25.0, metadata={"doc": "frame rate, Hz", "min": 1.0, "max": 200.0})
-    hfov_deg: float = field(default=8.0, metadata={"doc": "horizontal field of view, degrees (square pixels)",
-                                                   "min": 0.5, "max": 120.0})
-    bits: int = field(default=16, metadata={"doc": "sensor bit depth; 8 publishes mono8, else mono16",
-                                            "choices": (8, 10, 12, 14, 16)})
-    autostart: bool = field(default=True, metadata={
-        "doc": "start the scene clock with the first frame; false: hold t = 0 until /scene/start is called"})
-    duration_s: float = field(default=0.0, metadata={
-        "doc": "scene length, s; the clock holds at the end (0: the scene's own length)", "min": 0.0,
-        "max": 3600.0})
-    target_id: int = field(default=1, metadata={"doc": "identity of the pedestrian on /ground_truth/*",
-                                                "min": 0, "max": 1_000_000})
-    frame_id: str = field(default="camera_optical_frame", metadata={"doc": "header frame_id of the outputs"})
-    initial_pan_deg: float = field(default=0.0, metadata={"doc": "pan used until the first joint state, deg",
-                                                          "min": -360.0, "max": 360.0})
-    initial_tilt_deg: float = field(default=0.0, metadata={
-        "doc": "tilt used until the first joint state, deg", "min": -90.0, "max": 90.0})
-    extrapolate_s: float = field(default=0.3, metadata={
-        "doc": "extrapolate the last joint state (from its header stamp) with its velocity up to this "
-               "age, s (0: hold)", "min": 0.0, "max": 2.0})
+    scene: str = param(
+        "demo", "world to render: 'demo' (the closed-loop demo scene) or a harness scenario name")
+    seed: int = param(7, "scene seed (same seed, same scene)", 0, 2**31 - 1)
+    width: int = param(576, "image width, pixels", 16, 4096)
+    height: int = param(504, "image height, pixels", 16, 4096)
+    fps: float = param(25.0, "frame rate, Hz", 1.0, 200.0)
+    hfov_deg: float = param(8.0, "horizontal field of view, degrees (square pixels)", 0.5, 120.0)
+    bits: int = param(16, "sensor bit depth; 8 publishes mono8, else mono16", choices=(8, 10, 12, 14, 16))
+    autostart: bool = param(
+        True, "start the scene clock with the first frame; false: hold t = 0 until /scene/start is called")
+    duration_s: float = param(
+        0.0, "scene length, s; the clock holds at the end (0: the scene's own length)", 0.0, 3600.0)
+    target_id: int = param(1, "identity of the pedestrian on /ground_truth/*", 0, 1_000_000)
+    frame_id: str = param("camera_optical_frame", "header frame_id of the outputs")
+    initial_pan_deg: float = param(0.0, "pan used until the first joint state, deg", -360.0, 360.0)
+    initial_tilt_deg: float = param(0.0, "tilt used until the first joint state, deg", -90.0, 90.0)
+    extrapolate_s: float = param(
+        0.3, "extrapolate the last joint state (from its header stamp) with its velocity up to this age, s "
+        "(0: hold)", 0.0, 2.0)
 
     def validate(self) -> SceneCameraParams:
+        """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`); returns self."""
+        validate_params(self)
+        return self
+
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
         if self.scene not in scene_names():
             raise ParameterError(f"parameter scene = {self.scene!r} is not one of {scene_names()}")
         if self.width % 2 or self.height % 2:
             raise ParameterError(f"width x height must be even, got {self.width}x{self.height}")
-        return self
+
+
+PARAMS_FILE = ParamsFile(
+    "params/scene_camera.yaml", "/**", (("", SceneCameraParams, ""),),
+    "Parameters of the `scene_camera` node (docs/demo.md), a simulated SWIR camera on the pan-tilt head, "
+    "every one at its default. " + GENERATED + " swir_tracker_ros/simulation/scene_camera_node.py, not "
+    "this file. Use: ros2 run swir_tracker_ros scene_camera --ros-args --params-file "
+    "params/scene_camera.yaml")
 
 
 def ground_truth_values(scene_time: float, truth: Truth | None, view: CameraView,
@@ -120,13 +126,14 @@ class SceneCameraNode(Node):
         self.frames = 0
         # Reliable, shallow: sensor-data (best-effort) subscribers such as the tracker match it and get the
         # newest frame; a reliable recorder gets every frame, lost fragments of the large image re-sent.
-        self.image_pub = self.create_publisher(Image, "/camera/image_raw", CAMERA_QOS)
-        self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", CAMERA_QOS)
-        self.gt_pub = self.create_publisher(PolygonStamped, "/ground_truth/box", QoSProfile(depth=10))
-        self.gt_state_pub = self.create_publisher(DiagnosticArray, GROUND_TRUTH_STATE, QoSProfile(depth=10))
-        self.create_subscription(JointState, JOINT_STATES_TOPIC, self._on_joints, 10)
-        self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self.create_service(Trigger, "/scene/start", self._on_start)
+        camera, reliable = profile(topics.CAMERA), profile(topics.RELIABLE)
+        self.image_pub = self.create_publisher(Image, topics.IMAGE, camera)
+        self.info_pub = self.create_publisher(CameraInfo, topics.CAMERA_INFO, camera)
+        self.gt_pub = self.create_publisher(PolygonStamped, topics.GROUND_TRUTH_BOX, reliable)
+        self.gt_state_pub = self.create_publisher(DiagnosticArray, topics.GROUND_TRUTH_STATE, reliable)
+        self.create_subscription(JointState, topics.JOINT_STATES, self._on_joints, reliable)
+        self.diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, reliable)
+        self.create_service(Trigger, topics.SCENE_START, self._on_start)
         self.timer = self.create_timer(1.0 / p.fps, self._tick)
         self.create_timer(1.0, self._publish_diagnostics)
         self.get_logger().info(
@@ -138,7 +145,7 @@ class SceneCameraNode(Node):
         try:
             s = joint_state_to_sample(msg)
         except MessageError as exc:
-            self.get_logger().warning(f"/positioner/joint_states: {exc}", throttle_duration_sec=5.0)
+            self.get_logger().warning(f"{topics.JOINT_STATES}: {exc}", throttle_duration_sec=5.0)
             return
         now = time.time()
         measured = s.stamp if 0.0 < s.stamp <= now else now  # the bridge stamps the measurement time
@@ -152,20 +159,18 @@ class SceneCameraNode(Node):
         age = now - self.pose[4]
         values = {"frames": self.frames, "scene_time": self.clock.time(now), "running": self.clock.running,
                   "head_pose_age_s": age if math.isfinite(age) else "never",
-                  **input_publishers(self, (JOINT_STATES_TOPIC,))}
+                  **input_publishers(self, (topics.JOINT_STATES,))}
         if math.isfinite(age) and age <= 1.0:
             level, text = diagnostics.OK, "rendering at the head pose"
         else:
-            level, text = diagnostics.WARN, f"no {JOINT_STATES_TOPIC} for 1 s: last known pose held"
+            level, text = diagnostics.WARN, f"no {topics.JOINT_STATES} for 1 s: last known pose held"
         st = diagnostics.status(STATUS_NAME, level, text, values, hardware_id="scene_camera")
         self.diag_pub.publish(diagnostics.diagnostic_array(make_header(now, self.p.frame_id), [st]))
 
     def _on_start(self, _req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
         started = self.clock.start(time.time())
-        resp.success = True
-        resp.message = f"scene clock started at {started:.6f}"
-        self.get_logger().info(resp.message)
-        return resp
+        self.get_logger().info(f"scene clock started at {started:.6f}")
+        return scene_start_reply(resp, started)
 
     def head_view(self, now: float) -> CameraView:
         """The view at `now`: the last joint state moved on by its velocity for at most extrapolate_s.

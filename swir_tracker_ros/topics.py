@@ -1,0 +1,76 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The ROS graph's names, message types and QoS, defined once (docs/interfaces.md, "ROS graph").
+
+Plain values, no rclpy: nodes, the demo, the harness and parameter defaults import the names from here;
+`msg_adapters.qos.profile` turns a `QoS` into an rclpy `QoSProfile`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# Topics and services, by the role they play in the graph.
+IMAGE = "/camera/image_raw"
+CAMERA_INFO = "/camera/camera_info"
+JOINT_STATES = "/positioner/joint_states"
+TRACK_INIT = "/track/init"
+TRACK_CANCEL = "/track/cancel"  # std_srvs/Trigger service
+TRACK_BOX = "/track/box"
+PAN_TILT_ERROR = "/track/pan_tilt_error"
+TRACK_STATE = "/track/state"
+TRACK_DEBUG_IMAGE = "/track/debug_image"
+DIAGNOSTICS = "/diagnostics"
+GROUND_TRUTH_BOX = "/ground_truth/box"
+GROUND_TRUTH_STATE = "/ground_truth/state"
+GROUND_TRUTH_OCCLUDED = "/ground_truth/occluded"
+SCENE_START = "/scene/start"  # std_srvs/Trigger service
+ACQUISITION_TRACKS = "/acquisition/tracks"
+ACQUISITION_CANDIDATES = "/acquisition/candidates"
+ACQUISITION_SELECT = "/acquisition/select"
+ACQUISITION_DEBUG_IMAGE = "/acquisition/debug_image"
+CLOCK = "/clock"
+
+# The message type of every topic (ROS type names: rosbag2 connections, rclpy classes via msg_adapters).
+TYPES: dict[str, str] = {
+    IMAGE: "sensor_msgs/msg/Image",
+    CAMERA_INFO: "sensor_msgs/msg/CameraInfo",
+    JOINT_STATES: "sensor_msgs/msg/JointState",
+    TRACK_INIT: "sensor_msgs/msg/RegionOfInterest",
+    TRACK_BOX: "geometry_msgs/msg/PolygonStamped",
+    PAN_TILT_ERROR: "geometry_msgs/msg/Vector3Stamped",
+    TRACK_STATE: "diagnostic_msgs/msg/DiagnosticArray",
+    TRACK_DEBUG_IMAGE: "sensor_msgs/msg/Image",
+    DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray",
+    GROUND_TRUTH_BOX: "geometry_msgs/msg/PolygonStamped",
+    GROUND_TRUTH_STATE: "diagnostic_msgs/msg/DiagnosticArray",
+    GROUND_TRUTH_OCCLUDED: "std_msgs/msg/Bool",
+    ACQUISITION_TRACKS: "visualization_msgs/msg/MarkerArray",
+    ACQUISITION_CANDIDATES: "visualization_msgs/msg/MarkerArray",
+    ACQUISITION_SELECT: "std_msgs/msg/UInt32",
+    ACQUISITION_DEBUG_IMAGE: "sensor_msgs/msg/Image",
+    CLOCK: "rosgraph_msgs/msg/Clock",
+}
+
+
+@dataclass(frozen=True)
+class QoS:
+    """A keep-last QoS: history depth and reliable (True) or best-effort (False) delivery; volatile."""
+
+    depth: int
+    reliable: bool
+
+
+# Inputs from sensors: the newest sample only, never waiting for a lost one (a best-effort subscriber
+# matches reliable and best-effort publishers alike).
+LATEST = QoS(1, reliable=False)
+SENSOR = QoS(10, reliable=False)
+# Outputs, commands and health: every message delivered.
+RELIABLE = QoS(10, reliable=True)
+# The debug picture: reliable (its large frames would lose fragments best effort), newest only.
+DEBUG_IMAGE = QoS(1, reliable=True)
+# The simulated camera: reliable and shallow, so a best-effort tracker gets the newest frame and a
+# reliable recorder every frame, lost fragments of the large image re-sent.
+CAMERA = QoS(2, reliable=True)
+# Recorders (demo supervisor, harness replay): reliable with room for bursts; images shallower.
+RECORD = QoS(50, reliable=True)
+RECORD_IMAGE = QoS(10, reliable=True)
