@@ -9,8 +9,8 @@ import pytest
 
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.windows import search_window
-from swir_tracker_ros.demo.world import build_scene
 from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_scene import build_scene
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackState
 
