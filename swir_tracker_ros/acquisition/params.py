@@ -35,10 +35,11 @@ class AcquisitionParams:
     candidates: int = _f(3, "tracks offered when the single-object tracker reports lost", 1, 50)
     publish_debug: bool = _f(True, "publish /acquisition/debug_image (only with subscribers)")
     motion_history: int = _f(_M.history, "frames in the temporal-median background buffer", 1, 201)
-    motion_sample_every: int = _f(_M.sample_every, "a frame enters the background buffer every this many frames",
-                                  1, 100)
+    motion_sample_every: int = _f(_M.sample_every,
+                                  "a frame enters the background buffer every this many frames", 1, 100)
     motion_threshold: float = _f(_M.threshold,
-                                 "foreground above this difference to the background (8-bit levels)", 1.0, 255.0)
+                                 "foreground above this difference to the background (8-bit levels)",
+                                 1.0, 255.0)
     motion_min_area: float = _f(_M.min_area, "smallest foreground region kept (px)", 0.0, 1e7)
     motion_open_size: int = _f(_M.open_size, "morphological opening kernel (px)", 1, 51)
     motion_close_size: int = _f(_M.close_size, "morphological closing kernel (px)", 1, 101)
