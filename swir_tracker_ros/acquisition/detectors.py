@@ -34,7 +34,9 @@ class MotionParams:
     sample_every: int = 2  # a frame enters the buffer every this many frames (span = history * sample_every)
     threshold: float = 14.0  # foreground if |I - background| exceeds this (8-bit levels)
     open_size: int = 3  # opening kernel (px), removes speckle
-    close_size: int = 15  # closing kernel (px), joins the limbs and body of one person into one region
+    close_size: int = 9  # closing kernel (px), joins the limbs and body of one person into one region ...
+    close_rel: float = 0.05  # ... until people are found; then this times their running median height
+    # (a fixed kernel that joins a near person's parts also joins far people side by side); 0 = close_size
     min_area: float = 1000.0  # discard foreground regions with fewer pixels than this
     warmup: int = 1  # frames used to build the background before detections are reported
     aspect: float = 0.4  # width / height of a standing person (MOT ground truth boxes: 0.39 median)
@@ -87,6 +89,7 @@ class MotionDetector:
         self.background: np.ndarray | None = None
         self.recent: list[np.ndarray] = []  # the last ghost_lag + 1 frames (working resolution), oldest first
         self.count = 0
+        self.person_h: float | None = None  # running median height of the boxes reported (full-resolution px)
 
     @staticmethod
     def _shift(img: np.ndarray, dx: float, dy: float) -> np.ndarray:
@@ -111,16 +114,23 @@ class MotionDetector:
             if self.background is not None:
                 self.background = self._shift(self.background, dx, dy)
         self.recent = [*self.recent, g][-(p.ghost_lag + 1):]
+        bg = self._background(g)
+        self.count += 1
+        fg = (np.abs(g - bg) > p.threshold).astype(np.uint8) * 255
+        close = p.close_size if p.close_rel <= 0 or self.person_h is None else p.close_rel * self.person_h
+        ko, kc = (max(1, round(k * p.scale)) for k in (p.open_size, close))
+        fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ko, ko)))
+        fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kc, kc)))
+        return fg
+
+    def _background(self, g: np.ndarray) -> np.ndarray:
+        """Enter g into the buffer (every sample_every frames) and return the background for g."""
+        p = self.params
         if self.count % p.sample_every == 0 or not self.buffer:
             self.buffer = [*self.buffer, g][-p.history:]
             self.background = np.median(np.stack(self.buffer), axis=0)  # NaN where a shift uncovered a pixel
-        self.count += 1
         assert self.background is not None
-        bg = np.where(np.isnan(self.background), g, self.background)
-        fg = (np.abs(g - bg) > p.threshold).astype(np.uint8) * 255
-        ko, kc = (max(1, round(k * p.scale)) for k in (p.open_size, p.close_size))
-        fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ko, ko)))
-        return cv2.morphologyEx(fg, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kc, kc)))
+        return np.where(np.isnan(self.background), g, self.background)
 
     def _absorb(self, region: np.ndarray) -> None:
         """Write the current frame into the background buffer at a ghost's pixels (selective update)."""
@@ -153,6 +163,9 @@ class MotionDetector:
             for bx, by, bw, bh, fill in self._people(mask):
                 box = Box((x + bx) / p.scale, (y + by) / p.scale, bw / p.scale, bh / p.scale)
                 dets.append(Detection(box, float(min(1.0, 0.5 + fill / 2))))
+        if dets:
+            h = float(np.median([d.box.h for d in dets]))
+            self.person_h = h if self.person_h is None else 0.9 * self.person_h + 0.1 * h
         return dets
 
     def _people(self, mask: np.ndarray) -> list[tuple[float, float, float, float, float]]:
