@@ -43,12 +43,12 @@ from swir_tracker_ros.types import Box  # noqa: E402
 TUD = REPO.parent / "shared" / "data" / "mot" / "tud_campus"
 VARIANTS = {
     "default": {},
-    "no ghost test": {"ghost_motion": 0.0},
+    "no ghost test": {"ghost_speed": 0.0},
     "no head split": {"head_prominence": 1e9},
     "closing 9 px fixed": {"close_rel": 0.0},
     "closing 15 px fixed": {"close_rel": 0.0, "close_size": 15},
     "warm-up 5": {"warmup": 5},
-    "former (issue 16 start)": {"warmup": 5, "close_rel": 0.0, "ghost_motion": 0.0, "head_prominence": 1e9},
+    "former (issue 16 start)": {"warmup": 5, "close_rel": 0.0, "ghost_speed": 0.0, "head_prominence": 1e9},
 }
 MISS = ("warm-up", "hidden > 50 %", "merged", "split", "part", "too large", "offset", "not found")
 FALSE = ("merged group", "part of a person", "too large", "offset", "nobody")

@@ -45,8 +45,10 @@ class MotionParams:
     trim_v: float = 0.01  # ... and along the height (a stray pixel row)
     scale: float = 0.5  # the frame is resized by this factor first (speed; sizes above: full-resolution px)
     ghost_lag: int = 1  # the motion check of a region compares the frame with the one this many frames back
-    ghost_motion: float = 0.2  # a region with less than this fraction of its pixels changed over ghost_lag
-    # frames is a ghost (the background still holds someone who has left): absorbed, not reported; 0 = off
+    ghost_speed: float = 0.5  # a region moving less than this (px per frame) is a ghost (the background still
+    # holds someone who has left): absorbed, not reported; 0 = off. Its speed is estimated from the pixels
+    # that changed over ghost_lag frames: an object moving v px changes about 2 v px per row, whatever its
+    # texture (its leading and trailing edges)
     head_prominence: float = 0.05  # a head is a top of the region's upper outline standing out by this
     # fraction of the region's height above the outline between it and the next head
     head_spacing: float = 0.6  # two heads are at least this times a person's width (aspect * height) apart
@@ -147,7 +149,7 @@ class MotionDetector:
             return []
         n, labels, stats, _ = cv2.connectedComponentsWithStats(fg)
         changed = None
-        if p.ghost_motion > 0 and len(self.recent) > p.ghost_lag:
+        if p.ghost_speed > 0 and len(self.recent) > p.ghost_lag:
             old = self.recent[0]
             changed = np.abs(self.recent[-1] - np.where(np.isnan(old), self.recent[-1], old)) > p.threshold
         min_area = p.min_area * p.scale**2
@@ -157,7 +159,9 @@ class MotionDetector:
             if area < min_area:
                 continue
             mask = labels[y:y + h, x:x + w] == i
-            if changed is not None and changed[y:y + h, x:x + w][mask].mean() < p.ghost_motion:
+            speed = None if changed is None else (
+                changed[y:y + h, x:x + w][mask].sum() / (2.0 * h * p.scale * p.ghost_lag))
+            if speed is not None and speed < p.ghost_speed:
                 self._absorb(labels == i)
                 continue
             for bx, by, bw, bh, fill in self._people(mask):
