@@ -42,7 +42,8 @@ class AcquisitionParams:
                                  1.0, 255.0)
     motion_min_area: float = _f(_M.min_area, "smallest foreground region kept (px)", 0.0, 1e7)
     motion_open_size: int = _f(_M.open_size, "morphological opening kernel (px)", 1, 51)
-    motion_close_size: int = _f(_M.close_size, "morphological closing kernel (px)", 1, 101)
+    motion_close_size: int = _f(_M.close_size, "morphological closing kernel (px) until people are found "
+                                f"(then {_M.close_rel} x their running median height)", 1, 101)
     hog_hit_threshold: float = _f(0.0, "HOG SVM hit threshold", -5.0, 5.0)
     hog_upscale: float = _f(1.0, "resize factor before HOG (people under 128 px need > 1)", 0.25, 4.0)
     auto_iou: float = _f(0.5, "automatic confirmation: IoU with the temporary track's prediction", 0.0, 1.0)
