@@ -13,7 +13,7 @@ least 25 % visible (as benchmarks/mot_eval.py).
 
 Rows ("variants") switch the changes of issue 16 off one at a time, so each one's share shows on the real
 sequence and on the synthetic crowds alike: "former" is the detector before them (warm-up 5 frames, a
-fixed 9 px closing, no ghost test, column split only).
+fixed 9 px closing, no ghost test, column split only, of regions wider than 1.5 persons).
 
 --offline adds a row whose background is the median of *all* frames of the sequence, past and future: an
 upper bound for a better background model with this segmentation. It is not the runtime path (the node
@@ -48,7 +48,8 @@ VARIANTS = {
     "closing 9 px fixed": {"close_rel": 0.0},
     "closing 15 px fixed": {"close_rel": 0.0, "close_size": 15},
     "warm-up 5": {"warmup": 5},
-    "former (issue 16 start)": {"warmup": 5, "close_rel": 0.0, "ghost_speed": 0.0, "head_prominence": 1e9},
+    "former (issue 16 start)": {"warmup": 5, "close_rel": 0.0, "ghost_speed": 0.0, "head_prominence": 1e9,
+                                "split_factor": 1.5},
 }
 MISS = ("warm-up", "hidden > 50 %", "merged", "split", "part", "too large", "offset", "not found")
 FALSE = ("merged group", "part of a person", "too large", "offset", "nobody")

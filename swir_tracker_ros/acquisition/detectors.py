@@ -40,7 +40,7 @@ class MotionParams:
     min_area: float = 1000.0  # discard foreground regions with fewer pixels than this
     warmup: int = 1  # frames used to build the background before detections are reported
     aspect: float = 0.4  # width / height of a standing person (MOT ground truth boxes: 0.39 median)
-    split_factor: float = 1.5  # a region wider than split_factor * aspect * height holds several people
+    split_factor: float = 1.2  # a region wider than split_factor * aspect * height may hold several people
     trim: float = 0.02  # box = the central 1 - 2 trim of the region's pixels across (swinging arms, legs)
     trim_v: float = 0.01  # ... and along the height (a stray pixel row)
     scale: float = 0.5  # the frame is resized by this factor first (speed; sizes above: full-resolution px)
@@ -51,7 +51,7 @@ class MotionParams:
     # texture (its leading and trailing edges)
     head_prominence: float = 0.05  # a head is a top of the region's upper outline standing out by this
     # fraction of the region's height above the outline between it and the next head
-    head_spacing: float = 0.6  # two heads are at least this times a person's width (aspect * height) apart
+    head_spacing: float = 0.5  # two heads are at least this times a person's width (aspect * height) apart
 
 
 def _extent(counts: np.ndarray, trim: float) -> tuple[int, int]:
