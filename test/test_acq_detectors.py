@@ -9,7 +9,12 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.acquisition.detectors import HogPeopleDetector, MotDetFile, MotionDetector
+from swir_tracker_ros.acquisition.detectors import (
+    HogPeopleDetector,
+    MotDetFile,
+    MotionDetector,
+    MotionParams,
+)
 from swir_tracker_ros.errors import AcquisitionError
 from swir_tracker_ros.scene import crowd
 from swir_tracker_ros.types import Box
@@ -31,14 +36,10 @@ def test_motion_detector_finds_walkers_and_ignores_the_static_scene() -> None:
     assert all(static.detect(img) == [] for _ in range(15))
 
 
-def test_motion_detector_finds_most_pedestrians_on_tud_campus(shared_dir: Path) -> None:
-    # Static camera, people present from the first frame and walking in groups. Per frame, greedy one-to-one
-    # matching at IoU >= 0.5 against the ground truth (all 71 frames, warm-up included). The former running
-    # Gaussian background (ghosts of the people of frame 1, groups merged into one box) found 4 % at 6 %
-    # precision; the temporal median with person-width splitting measures 48 % at 52 %.
-    seq = shared_dir / "data" / "mot" / "tud_campus"
+def _tud_recall_precision(seq: Path, det: MotionDetector) -> tuple[float, float]:
+    """Per frame, greedy one-to-one matching at IoU >= 0.5 against the ground truth (all 71 frames, warm-up
+    included): (matched / ground truth, matched / detections)."""
     rows = np.loadtxt(seq / "gt.txt", delimiter=",", ndmin=2)
-    det = MotionDetector()
     tp = n_det = n_gt = 0
     for f in range(1, int(rows[:, 0].max()) + 1):
         img = cv2.imread(str(seq / f"{f:06d}.png"), cv2.IMREAD_GRAYSCALE)
@@ -55,7 +56,57 @@ def test_motion_detector_finds_most_pedestrians_on_tud_campus(shared_dir: Path) 
         tp += len(used_b)
         n_det += len(boxes)
         n_gt += len(gt)
-    assert tp / n_gt > 0.4 and tp / n_det > 0.45, (tp / n_gt, tp / n_det)
+    return tp / n_gt, tp / n_det
+
+
+def test_motion_detector_finds_most_pedestrians_on_tud_campus(shared_dir: Path) -> None:
+    # Static camera, people present from the first frame and walking in groups. The former running Gaussian
+    # background found 4 % at 6 % precision, the temporal median with person-width splitting 47.9 % at
+    # 51.8 %; with the ghost test, the head split, a 1-frame warm-up and the closing scaled with the people
+    # found it measures 54.3 % at 67.9 % (benchmarks/motion_eval.py; a quarter of the ground truth is more
+    # than half hidden behind nearer people, out of reach of one silhouette per region).
+    seq = shared_dir / "data" / "mot" / "tud_campus"
+    recall, precision = _tud_recall_precision(seq, MotionDetector())
+    assert recall > 0.52 and precision > 0.66, (recall, precision)
+    # Each change carries its share: without the head split groups stay one box or are cut at the wrong
+    # columns (51.5 % at 59.9 %), without the ghost test the places people left are reported (58.9 %).
+    no_heads = _tud_recall_precision(seq, MotionDetector(MotionParams(head_prominence=1e9)))
+    no_ghost = _tud_recall_precision(seq, MotionDetector(MotionParams(ghost_speed=0.0)))
+    assert no_heads[0] < recall - 0.01 and no_heads[1] < precision - 0.05, no_heads
+    assert no_ghost[1] < precision - 0.03, no_ghost
+
+
+def _textured_background(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    b = cv2.GaussianBlur(rng.uniform(0, 255, (480, 640)).astype(np.float32), (0, 0), 6.0)
+    return np.clip((b - b.mean()) * 4 + 120, 0, 255)
+
+
+def test_ghost_of_someone_who_stood_still_is_absorbed() -> None:
+    # A person stands at column 100 for 16 frames, then walks off at 6 px per frame. The median buffer holds
+    # them at the old place for about as long again: once the walker's region has left it (frame 27), a
+    # region there without motion is a ghost, written into the background and not reported (Cucchiara et
+    # al. 2003); the walker himself is still found.
+    bg = _textured_background(1)
+    kept, ghost = MotionDetector(), MotionDetector(MotionParams(ghost_speed=0.0))
+    stray = {id(kept): 0, id(ghost): 0}
+    found = 0
+    for k in range(40):
+        img = bg.copy()
+        x = 100 if k < 16 else 100 + 6 * (k - 15)
+        cv2.rectangle(img, (x - 30, 226), (x + 30, 360), 40.0, -1)
+        cv2.circle(img, (x, 213), 13, 40.0, -1)
+        truth = Box(x - 30.0, 200.0, 60.0, 160.0)
+        frame = img.astype(np.uint8)
+        for det in (kept, ghost):
+            boxes = [d.box for d in det.detect(frame)]
+            if k >= 27:
+                stray[id(det)] += sum(b.iou(truth) < 0.1 and abs(b.cx - 100) < 40 for b in boxes)
+                if det is kept:
+                    found += any(b.iou(truth) > 0.5 for b in boxes)
+    assert stray[id(kept)] == 0
+    assert stray[id(ghost)] >= 4  # without the test the ghost stays until the median forgets it
+    assert found >= 12
 
 
 def _pan(img: np.ndarray, dx: float) -> np.ndarray:

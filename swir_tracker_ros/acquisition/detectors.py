@@ -10,6 +10,7 @@ from typing import Protocol
 
 import cv2
 import numpy as np
+from scipy.signal import find_peaks
 
 from swir_tracker_ros.acquisition.association import Detection
 from swir_tracker_ros.acquisition.descriptors import to_gray8
@@ -33,14 +34,24 @@ class MotionParams:
     sample_every: int = 2  # a frame enters the buffer every this many frames (span = history * sample_every)
     threshold: float = 14.0  # foreground if |I - background| exceeds this (8-bit levels)
     open_size: int = 3  # opening kernel (px), removes speckle
-    close_size: int = 9  # closing kernel (px), fills holes in a body
+    close_size: int = 9  # closing kernel (px), joins the limbs and body of one person into one region ...
+    close_rel: float = 0.05  # ... until people are found; then this times their running median height
+    # (a fixed kernel that joins a near person's parts also joins far people side by side); 0 = close_size
     min_area: float = 1000.0  # discard foreground regions with fewer pixels than this
-    warmup: int = 5  # frames used to build the background before detections are reported
+    warmup: int = 1  # frames used to build the background before detections are reported
     aspect: float = 0.4  # width / height of a standing person (MOT ground truth boxes: 0.39 median)
-    split_factor: float = 1.5  # a region wider than split_factor * aspect * height holds several people
+    split_factor: float = 1.2  # a region wider than split_factor * aspect * height may hold several people
     trim: float = 0.02  # box = the central 1 - 2 trim of the region's pixels across (swinging arms, legs)
     trim_v: float = 0.01  # ... and along the height (a stray pixel row)
     scale: float = 0.5  # the frame is resized by this factor first (speed; sizes above: full-resolution px)
+    ghost_lag: int = 1  # the motion check of a region compares the frame with the one this many frames back
+    ghost_speed: float = 0.5  # a region moving less than this (px per frame) is a ghost (the background still
+    # holds someone who has left): absorbed, not reported; 0 = off. Its speed is estimated from the pixels
+    # that changed over ghost_lag frames: an object moving v px changes about 2 v px per row, whatever its
+    # texture (its leading and trailing edges)
+    head_prominence: float = 0.05  # a head is a top of the region's upper outline standing out by this
+    # fraction of the region's height above the outline between it and the next head
+    head_spacing: float = 0.5  # two heads are at least this times a person's width (aspect * height) apart
 
 
 def _extent(counts: np.ndarray, trim: float) -> tuple[int, int]:
@@ -52,14 +63,23 @@ def _extent(counts: np.ndarray, trim: float) -> tuple[int, int]:
 
 class MotionDetector:
     """Temporal-median background of a buffer of past frames, threshold, opening then closing, connected
-    regions; a region wider than a person is split at the emptiest columns into person-wide parts, and each
-    box is the trimmed extent of its pixels.
+    regions; regions without motion are ghosts; a region wider than a person is split at its heads (or, with
+    fewer than two heads, at the emptiest columns) into people, and each box is the trimmed extent of its
+    pixels.
 
     A median over frames spanning history * sample_every frames holds the scene without the people who walk
     through it (a pixel is background in most of them), so people present from the first frame do not
-    leave "ghosts" as a running average does. The buffered frames and the background are shifted by the
-    known image shift (from the head's joint states) before each comparison, so a panning camera does not
-    turn the whole scene into foreground; pixels uncovered by the shift take the current frame.
+    leave "ghosts" as a running average does once the buffer is full. Until then (and for people who stood
+    still for a while) the median still holds them: a region of the difference to the background where the
+    frame did not change over the last ghost_lag frames is the place someone has left, not someone moving.
+    It is not reported and its pixels are written into the buffered frames (the ghost test and selective
+    update of Cucchiara et al., "Detecting moving objects, ghosts, and shadows in video streams", IEEE PAMI
+    25(10), 2003, Section 3, with frame differencing in place of their optical flow). This lets the detector
+    report from the second frame on.
+
+    The buffered frames and the background are shifted by the known image shift (from the head's joint
+    states) before each comparison, so a panning camera does not turn the whole scene into foreground;
+    pixels uncovered by the shift take the current frame. The ghost test's previous frame is shifted alike.
     """
 
     def __init__(self, params: MotionParams | None = None) -> None:
@@ -69,7 +89,9 @@ class MotionDetector:
     def reset(self) -> None:
         self.buffer: list[np.ndarray] = []
         self.background: np.ndarray | None = None
+        self.recent: list[np.ndarray] = []  # the last ghost_lag + 1 frames (working resolution), oldest first
         self.count = 0
+        self.person_h: float | None = None  # running median height of the boxes reported (full-resolution px)
 
     @staticmethod
     def _shift(img: np.ndarray, dx: float, dy: float) -> np.ndarray:
@@ -90,18 +112,35 @@ class MotionDetector:
         dx, dy = ego_shift[0] * p.scale, ego_shift[1] * p.scale
         if dx or dy:
             self.buffer = [self._shift(b, dx, dy) for b in self.buffer]
+            self.recent = [self._shift(b, dx, dy) for b in self.recent]
             if self.background is not None:
                 self.background = self._shift(self.background, dx, dy)
+        self.recent = [*self.recent, g][-(p.ghost_lag + 1):]
+        bg = self._background(g)
+        self.count += 1
+        fg = (np.abs(g - bg) > p.threshold).astype(np.uint8) * 255
+        close = p.close_size if p.close_rel <= 0 or self.person_h is None else p.close_rel * self.person_h
+        ko, kc = (max(1, round(k * p.scale)) for k in (p.open_size, close))
+        fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ko, ko)))
+        fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kc, kc)))
+        return fg
+
+    def _background(self, g: np.ndarray) -> np.ndarray:
+        """Enter g into the buffer (every sample_every frames) and return the background for g."""
+        p = self.params
         if self.count % p.sample_every == 0 or not self.buffer:
             self.buffer = [*self.buffer, g][-p.history:]
             self.background = np.median(np.stack(self.buffer), axis=0)  # NaN where a shift uncovered a pixel
-        self.count += 1
         assert self.background is not None
-        bg = np.where(np.isnan(self.background), g, self.background)
-        fg = (np.abs(g - bg) > p.threshold).astype(np.uint8) * 255
-        ko, kc = (max(1, round(k * p.scale)) for k in (p.open_size, p.close_size))
-        fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ko, ko)))
-        return cv2.morphologyEx(fg, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kc, kc)))
+        return np.where(np.isnan(self.background), g, self.background)
+
+    def _absorb(self, region: np.ndarray) -> None:
+        """Write the current frame into the background buffer at a ghost's pixels (selective update)."""
+        g = self.recent[-1]
+        for b in self.buffer:
+            b[region] = g[region]
+        assert self.background is not None
+        self.background[region] = g[region]
 
     def detect(self, frame: np.ndarray, ego_shift: tuple[float, float] = (0.0, 0.0)) -> list[Detection]:
         p = self.params
@@ -109,6 +148,10 @@ class MotionDetector:
         if self.count <= p.warmup:
             return []
         n, labels, stats, _ = cv2.connectedComponentsWithStats(fg)
+        changed = None
+        if p.ghost_speed > 0 and len(self.recent) > p.ghost_lag:
+            old = self.recent[0]
+            changed = np.abs(self.recent[-1] - np.where(np.isnan(old), self.recent[-1], old)) > p.threshold
         min_area = p.min_area * p.scale**2
         dets = []
         for i in range(1, n):
@@ -116,26 +159,75 @@ class MotionDetector:
             if area < min_area:
                 continue
             mask = labels[y:y + h, x:x + w] == i
-            cols = mask.sum(axis=0)
-            parts = max(1, round(w / (p.aspect * h))) if w > p.split_factor * p.aspect * h else 1
-            cuts = [0]
-            for c in range(1, parts):  # cut at the emptiest column near each equal division
-                c0, r = int(c * w / parts), max(1, int(w / (2 * parts)))
-                lo, hi = max(cuts[-1] + 1, c0 - r), min(w - 1, c0 + r)
-                cuts.append(lo + int(np.argmin(cols[lo:hi])) if hi > lo else c0)
-            cuts.append(w)
-            for a0, a1 in itertools.pairwise(cuts):
-                sub = mask[:, a0:a1]
-                px = int(sub.sum())
-                if px < min_area / 2:
-                    continue
-                x0, x1 = _extent(sub.sum(axis=0), p.trim)
-                y0, y1 = _extent(sub.sum(axis=1), p.trim_v)
-                fill = px / float(sub.size)
-                box = Box(float(x + a0 + x0) / p.scale, float(y + y0) / p.scale, float(x1 - x0) / p.scale,
-                          float(y1 - y0) / p.scale)
+            speed = None if changed is None else (
+                changed[y:y + h, x:x + w][mask].sum() / (2.0 * h * p.scale * p.ghost_lag))
+            if speed is not None and speed < p.ghost_speed:
+                self._absorb(labels == i)
+                continue
+            for bx, by, bw, bh, fill in self._people(mask):
+                box = Box((x + bx) / p.scale, (y + by) / p.scale, bw / p.scale, bh / p.scale)
                 dets.append(Detection(box, float(min(1.0, 0.5 + fill / 2))))
+        if dets:
+            h = float(np.median([d.box.h for d in dets]))
+            self.person_h = h if self.person_h is None else 0.9 * self.person_h + 0.1 * h
         return dets
+
+    def _people(self, mask: np.ndarray) -> list[tuple[float, float, float, float, float]]:
+        """Boxes (x, y, w, h, fill) in the region's frame: one per head when the region is wider than
+        split_factor people and shows at least two heads, else the emptiest-column split."""
+        p = self.params
+        h, w = mask.shape
+        if w > p.split_factor * p.aspect * h:
+            heads = self._heads(mask)
+            if len(heads) >= 2:
+                return heads
+        cols = mask.sum(axis=0)
+        parts = max(1, round(w / (p.aspect * h))) if w > p.split_factor * p.aspect * h else 1
+        cuts = [0]
+        for c in range(1, parts):  # cut at the emptiest column near each equal division
+            c0, r = int(c * w / parts), max(1, int(w / (2 * parts)))
+            lo, hi = max(cuts[-1] + 1, c0 - r), min(w - 1, c0 + r)
+            cuts.append(lo + int(np.argmin(cols[lo:hi])) if hi > lo else c0)
+        cuts.append(w)
+        out = []
+        for a0, a1 in itertools.pairwise(cuts):
+            sub = mask[:, a0:a1]
+            px = int(sub.sum())
+            if px < p.min_area * p.scale**2 / 2:
+                continue
+            x0, x1 = _extent(sub.sum(axis=0), p.trim)
+            y0, y1 = _extent(sub.sum(axis=1), p.trim_v)
+            out.append((float(a0 + x0), float(y0), float(x1 - x0), float(y1 - y0), px / float(sub.size)))
+        return out
+
+    def _heads(self, mask: np.ndarray) -> list[tuple[float, float, float, float, float]]:
+        """People of a merged region, one per head: the heads are the tops of the region's upper outline
+        (one row per column, smoothed over 0.1 of the region's height) that stand out by head_prominence of
+        the height and lie head_spacing person widths apart; each person spans from its head to the lowest
+        region pixel under it (within a quarter person width) and is aspect times that tall. Boxes of
+        people one behind the other overlap, as their ground truth does."""
+        p = self.params
+        h, w = mask.shape
+        width = p.aspect * h
+        filled = mask.any(axis=0)
+        top = np.where(filled, mask.argmax(axis=0), h).astype(np.float64)
+        bottom = np.where(filled, h - 1 - mask[::-1].argmax(axis=0), -1)
+        k = max(1, int(0.05 * h))
+        smooth = np.convolve(np.pad(top, k, mode="edge"), np.ones(2 * k + 1) / (2 * k + 1), mode="valid")
+        peaks, _ = find_peaks(np.concatenate([[-h], -smooth, [-h]]),  # padded: a head at the region's edge
+                              distance=max(1.0, p.head_spacing * width), prominence=p.head_prominence * h)
+        out = []
+        half = max(1, int(0.25 * width))
+        for c in peaks - 1:
+            lo, hi = max(0, c - half), min(w, c + half + 1)
+            t, b = int(top[lo:hi].min()), int(bottom[lo:hi].max()) + 1
+            wi = p.aspect * (b - t)
+            x0, x1 = max(0.0, c - wi / 2), min(float(w), c + wi / 2)
+            if x1 <= x0 or b <= t:
+                continue
+            fill = float(mask[t:b, int(x0):int(np.ceil(x1))].mean())
+            out.append((x0, float(t), x1 - x0, float(b - t), fill))
+        return out
 
 
 @dataclass(frozen=True)

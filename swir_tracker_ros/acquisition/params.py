@@ -19,6 +19,7 @@ from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 
 DETECTORS = ("motion", "hog")
+_M = MotionParams()  # the motion detector's defaults are written once, in MotionParams
 
 
 @dataclass
@@ -35,13 +36,16 @@ class AcquisitionParams:
     auto_handoff: bool = _f(False, "hand off a confirmed moving target by itself (tracker idle or lost)")
     candidates: int = _f(3, "tracks offered when the single-object tracker reports lost", 1, 50)
     publish_debug: bool = _f(True, "publish /acquisition/debug_image (only with subscribers)")
-    motion_history: int = _f(21, "frames in the temporal-median background buffer", 1, 201)
-    motion_sample_every: int = _f(2, "a frame enters the background buffer every this many frames", 1, 100)
-    motion_threshold: float = _f(14.0, "foreground above this difference to the background (8-bit levels)",
+    motion_history: int = _f(_M.history, "frames in the temporal-median background buffer", 1, 201)
+    motion_sample_every: int = _f(_M.sample_every,
+                                  "a frame enters the background buffer every this many frames", 1, 100)
+    motion_threshold: float = _f(_M.threshold,
+                                 "foreground above this difference to the background (8-bit levels)",
                                  1.0, 255.0)
-    motion_min_area: float = _f(1000.0, "smallest foreground region kept (px)", 0.0, 1e7)
-    motion_open_size: int = _f(3, "morphological opening kernel (px)", 1, 51)
-    motion_close_size: int = _f(9, "morphological closing kernel (px)", 1, 101)
+    motion_min_area: float = _f(_M.min_area, "smallest foreground region kept (px)", 0.0, 1e7)
+    motion_open_size: int = _f(_M.open_size, "morphological opening kernel (px)", 1, 51)
+    motion_close_size: int = _f(_M.close_size, "morphological closing kernel (px) until people are found "
+                                f"(then {_M.close_rel} x their running median height)", 1, 101)
     hog_hit_threshold: float = _f(0.0, "HOG SVM hit threshold", -5.0, 5.0)
     hog_upscale: float = _f(1.0, "resize factor before HOG (people under 128 px need > 1)", 0.25, 4.0)
     auto_iou: float = _f(0.5, "automatic confirmation: IoU with the temporary track's prediction", 0.0, 1.0)
