@@ -40,12 +40,14 @@ class KCFFilter(BaseFilter):
         super().__init__(p, w, h)
         self._peak_sum = self._apce_sum = 0.0
         self._n = 0
+        gate = self.fp.update_gate
+        self._gate = gate if gate != "auto" else ("lmcf" if p.variant == "measured" else "peak")
 
     def confident(self, det: Detection) -> bool:
         """Gate `peak`: peak > 0.5 (paper 000). Gate `lmcf` (Wang et al., CVPR 2017, eq. 12): peak >=
         beta1 x mean peak and APCE >= beta2 x mean APCE, the means over the frames that updated."""
         fp = self.fp
-        if fp.update_gate == "peak":
+        if self._gate == "peak":
             return det.peak > fp.update_peak_threshold
         ok = self._n == 0 or (
             det.peak >= fp.lmcf_peak_ratio * self._peak_sum / self._n

@@ -42,10 +42,11 @@ class KCFParams:
         0.5, "update gate `peak`: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0
     )
     update_gate: str = _f(
-        "peak",
-        "confident-update gate: peak (paper 000: peak > update_peak_threshold) or lmcf (Wang et al., "
-        "CVPR 2017, eq. 12: peak and APCE both above a ratio of their means over the updated frames)",
-        choices=("peak", "lmcf"),
+        "auto",
+        "confident-update gate: peak (paper 000: peak > update_peak_threshold), lmcf (Wang et al., "
+        "CVPR 2017, eq. 12: peak and APCE both above a ratio of their means over the updated frames) or "
+        "auto: lmcf for the variant measured (ours), peak for the papers' variants",
+        choices=("auto", "peak", "lmcf"),
     )
     lmcf_peak_ratio: float = _f(0.7, "gate lmcf: beta1, peak >= beta1 x mean peak (LMCF)", 0.0, 2.0)
     lmcf_apce_ratio: float = _f(0.45, "gate lmcf: beta2, APCE >= beta2 x mean APCE (LMCF)", 0.0, 2.0)
