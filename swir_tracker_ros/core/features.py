@@ -94,7 +94,11 @@ def unwindowed_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray
 
 
 def extract_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray:
-    """`unwindowed_features` multiplied by the cosine window (KCF `get_features`)."""
+    """`unwindowed_features` multiplied by the cosine window (KCF `get_features`; FHOG applies it in its
+    normalisation loop, the same float32 products)."""
+    if kind in HOG_KINDS:
+        win = cosine_window(patches.shape[-2] // cell, patches.shape[-1] // cell)
+        return fhog(patches, cell, soft=kind == "hog_soft", window=win)
     feats = unwindowed_features(patches, kind, cell)
     feats *= cosine_window(feats.shape[2], feats.shape[3])
     return feats

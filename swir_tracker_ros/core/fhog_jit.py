@@ -1,0 +1,171 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Compiled (numba) loops of the FHOG cell histograms and block normalisation (issue 17).
+
+Imported by core/fhog.py only when numba is installed (requirements.txt pins it); without it fhog.py keeps
+its numpy path. Each loop performs, element by element, the same float32 / float64 operations in the same
+order as the numpy code it replaces (test/fhog_reference.py), so the features are bit-identical
+(test/test_core_fhog.py). The rules that keep them so:
+
+- no `fastmath` (no re-association, no fused multiply-add: LLVM contracts a * b + c only when allowed);
+- every constant is cast to float32 where the numpy code had a float32 scalar (a bare Python float would
+  promote the arithmetic to float64 in numba);
+- the float64 histogram sums keep the reference's order: per accumulator entry, the 4 passes (lower /
+  upper orientation bin x left / right cell) in turn, pixels in row order within each pass;
+- the row pooling and the normalisation keep the numpy passes' order per output element.
+
+Compiled on first use and cached on disk (`cache=True`: the package's __pycache__, or numba's user-wide
+cache directory when that is read-only).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+N_ORIENT = 9
+N_BINS = 2 * N_ORIENT
+
+
+@njit(cache=True, nogil=True)
+def cell_histograms_kernel(
+    mag: np.ndarray,
+    ang: np.ndarray,
+    h: int,
+    cell: int,
+    soft: bool,
+    x0: np.ndarray,
+    x1: np.ndarray,
+    wx0: np.ndarray,
+    wx1: np.ndarray,
+    pool_w: np.ndarray,
+    pool_nb: np.ndarray,
+    pool_dir: np.ndarray,
+    acc: np.ndarray,
+    hx: np.ndarray,
+    ob0: np.ndarray,
+    ob1: np.ndarray,
+    m0: np.ndarray,
+    m1: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Bilinear-cell orientation histograms of N stacked patches.
+
+    mag, ang: (N*h, W) float32 gradient magnitude and angle in [0, 2 pi]. x0, x1, wx0, wx1: each column's
+    two x cells and bilinear weights (fhog._axis_plan). pool_w / pool_nb / pool_dir: per row phase r of a
+    cell, the float32 weight of its own cell row, of the neighbouring cell row and that neighbour's
+    direction (-1, 0, +1) (fhog._pool_plan). acc: (wc*18,) float64, hx: (N*h, wc*18) float32, ob0 / ob1
+    (W,) intp, m0 / m1 (W,) float32: scratch. out: (N, hc, wc*18) float32, bin innermost.
+    """
+    nh, w = mag.shape
+    n = nh // h
+    hc = h // cell
+    k = out.shape[2]
+    scale = np.float32(N_BINS / (2.0 * np.pi))  # = fhog._BIN_SCALE
+    zero32 = np.float32(0.0)
+    for row in range(nh):
+        for x in range(w):  # orientation bins (fhog._orientation_bins) and the two magnitude shares
+            o = ang[row, x] * scale
+            m = mag[row, x]
+            if soft:
+                lower = np.floor(o)
+                od = o - lower
+            else:
+                lower = np.rint(o)
+                od = zero32
+            raw = min(int(lower), N_BINS)  # 0..18; 18 (o = 2 pi) is bin 0
+            ob0[x] = raw if raw < N_BINS else 0
+            ob1[x] = raw + 1 if raw < N_BINS - 1 else raw + 1 - N_BINS
+            share = m * od
+            m1[x] = share
+            m0[x] = m - share
+        acc[:] = 0.0
+        # the reference's 4 passes in its order; a weight is the float32 product, summed in float64
+        for x in range(w):
+            acc[x0[x] * N_BINS + ob0[x]] += np.float64(m0[x] * wx0[x])
+        for x in range(w):
+            acc[x1[x] * N_BINS + ob0[x]] += np.float64(m0[x] * wx1[x])
+        if soft:  # hard bins: the upper bin's weights are +0.0, adding them changes no sum
+            for x in range(w):
+                acc[x0[x] * N_BINS + ob1[x]] += np.float64(m1[x] * wx0[x])
+            for x in range(w):
+                acc[x1[x] * N_BINS + ob1[x]] += np.float64(m1[x] * wx1[x])
+        for j in range(k):
+            hx[row, j] = np.float32(acc[j])
+    for i in range(n):  # bilinear pooling of pixel rows into cell rows (fhog._pool_rows' order)
+        for ci in range(hc):
+            dst = out[i, ci]
+            dst[:] = zero32
+            for r in range(cell):
+                src = hx[i * h + r + cell * ci]
+                c = pool_w[r]
+                for j in range(k):
+                    dst[j] += c * src[j]
+                nb = ci + pool_dir[r]
+                if pool_dir[r] != 0 and 0 <= nb < hc:
+                    src = hx[i * h + r + cell * nb]
+                    c = pool_nb[r]
+                    for j in range(k):
+                        dst[j] += c * src[j]
+
+
+@njit(cache=True, nogil=True)
+def normalise_kernel(
+    hist: np.ndarray,
+    eps: np.float32,
+    clip: np.float32,
+    texture_weight: np.float32,
+    window: np.ndarray,
+    use_window: bool,
+    energy: np.ndarray,
+    inv: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """FHOG block normalisation (fhog.fhog's numpy passes, in their order per element).
+
+    hist: (N, hc, wc, 18) float32 cell histograms; energy (hc+2, wc+2), inv (hc+1, wc+1) float32 scratch;
+    out: (N, 31, hc, wc) float32; with use_window every value is then multiplied by window[y, x] (the
+    cosine window of features.extract_features, the same float32 product).
+    """
+    n, hc, wc, _ = hist.shape
+    one, half, zero32 = np.float32(1.0), np.float32(0.5), np.float32(0.0)
+    for i in range(n):
+        for y in range(hc):  # gradient energy of the 9 contrast-insensitive channels
+            for x in range(wc):
+                hh = hist[i, y, x]
+                s = zero32
+                for q in range(N_ORIENT):
+                    v = hh[q] + hh[q + N_ORIENT]
+                    s += v * v
+                energy[y + 1, x + 1] = s
+        for x in range(1, wc + 1):  # one replicated cell around the grid
+            energy[0, x] = energy[1, x]
+            energy[hc + 1, x] = energy[hc, x]
+        for y in range(hc + 2):
+            energy[y, 0] = energy[y, 1]
+            energy[y, wc + 1] = energy[y, wc]
+        for y in range(hc + 1):  # 2x2 blocks
+            for x in range(wc + 1):
+                b = energy[y, x] + energy[y + 1, x] + energy[y, x + 1] + energy[y + 1, x + 1]
+                inv[y, x] = one / np.sqrt(b + eps)
+        for y in range(hc):
+            for x in range(wc):
+                hh = hist[i, y, x]
+                n0, n1, n2, n3 = inv[y, x], inv[y, x + 1], inv[y + 1, x], inv[y + 1, x + 1]
+                s0 = s1 = s2 = s3 = zero32
+                wv = window[y, x] if use_window else one
+                for c in range(3 * N_ORIENT):
+                    v = hh[c] if c < N_BINS else hh[c - N_BINS] + hh[c - N_ORIENT]
+                    t0 = min(v * n0, clip)
+                    t1 = min(v * n1, clip)
+                    t2 = min(v * n2, clip)
+                    t3 = min(v * n3, clip)
+                    val = (((t0 + t1) + t2) + t3) * half
+                    out[i, c, y, x] = val * wv if use_window else val
+                    if c < N_BINS:
+                        s0 += t0
+                        s1 += t1
+                        s2 += t2
+                        s3 += t3
+                for q, s in enumerate((s0, s1, s2, s3)):
+                    val = s * texture_weight
+                    out[i, 3 * N_ORIENT + q, y, x] = val * wv if use_window else val
