@@ -125,24 +125,36 @@ class BaseFilter(ABC):
         return sx, sy, wins
 
     def grid_features(
-        self, img: np.ndarray, window: Box, overlap: float, keep: Sequence[int] = tuple(range(9))
+        self,
+        img: np.ndarray,
+        window: Box,
+        overlap: float,
+        keep: Sequence[int] = tuple(range(9)),
+        out: np.ndarray | None = None,
     ) -> tuple[np.ndarray, list[Box]]:
         """Windowed feature maps (len(keep), C, rows, cols) of the grid windows `keep` (row-major indices
         of the 3x3 grid) from ONE feature computation, and all 9 grid windows.
 
         The union of the 9 windows is resampled once at the template scale, its features computed once,
         and each kept window's map cut out of it (the windows sit on whole cells of the union), so the grid
-        costs (1 + 2 (1 - overlap))^2 ~ 5.4 windows of features instead of 9.
+        costs (1 + 2 (1 - overlap))^2 ~ 5.4 windows of features instead of 9. `out`: optional float32
+        array of the result's shape written in place.
         """
         sx, sy, wins = self.grid_geometry(window, overlap)
         c = self.cell
         uw, uh = self.tw + 2 * sx * c, self.th + 2 * sy * c
         kx, ky = window.w / self.tw, window.h / self.th
         union = Box.from_center(window.cx, window.cy, uw * kx, uh * ky)
-        feats = unwindowed_features(sample_patch(img, union, uw, uh)[None], self.kind, c)[0]
+        if img.dtype == np.float32 and img.ndim == 2:  # the conditioned frame: warp into a reused array
+            patch = self._scratch("grid union patch", (1, uh, uw))
+            sample_patch(img, union, uw, uh, out=patch[0])
+        else:
+            patch = sample_patch(img, union, uw, uh)[None]
+        feats = unwindowed_features(patch, self.kind, c)[0]
         fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
         win = cosine_window(fh, fw)
-        out = np.empty((len(keep), feats.shape[0], fh, fw), dtype=np.float32)
+        if out is None:
+            out = np.empty((len(keep), feats.shape[0], fh, fw), dtype=np.float32)
         for i, k in enumerate(keep):  # slices of the union map (steps are whole cells; gray: cell = 1 px)
             r0, c0 = (k // 3) * sy, (k % 3) * sx
             np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[i])
@@ -154,10 +166,20 @@ class BaseFilter(ABC):
         """Detections in the 3x3 re-detection grid around `window` (the centre one left out if asked,
         as normal mode already correlated it) and the 9 grid windows; `scale` is copied to each."""
         keep = [k for k in range(9) if not (skip_centre and k == 4)]
-        feats, wins = self.grid_features(img, window, overlap, keep)
+        buf = self._scratch("grid features", (len(keep), *self.shape))  # consumed by `respond` below
+        feats, wins = self.grid_features(img, window, overlap, keep, out=buf)
         responses = self.filter.respond(feats)
         dets = self._detections(responses, [wins[k] for k in keep], [scale] * len(keep))
         return dets, wins
+
+    def _scratch(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
+        """A float32 work array of `shape` reused from frame to frame (fresh multi-MB arrays cost page
+        faults on every frame: docs/speed.md); valid until the next call with the same name."""
+        bufs = self.__dict__.setdefault("_scratch_buffers", {})
+        buf = bufs.get(name)
+        if buf is None or buf.shape != shape:
+            buf = bufs[name] = np.empty(shape, dtype=np.float32)
+        return buf
 
     def detect(
         self,
