@@ -9,6 +9,7 @@ gate, its peak -> Huber threshold map and its Kalman box model. `Tracker` select
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
@@ -27,6 +28,7 @@ from swir_tracker_ros.core.features import (
     unwindowed_features,
 )
 from swir_tracker_ros.core.params import TrackerParams
+from swir_tracker_ros.core.scale import ScaleFilter
 from swir_tracker_ros.core.windows import template_size
 from swir_tracker_ros.kalman import BoxModel, ThresholdMap
 from swir_tracker_ros.types import Box
@@ -74,6 +76,10 @@ class BaseFilter(ABC):
         self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
         self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
         self.filter = self._build()
+        self.scale_filter: ScaleFilter | None = None  # DSST option (core/scale.py), else the scale search
+        if getattr(fp, "scale_estimator", "search") == "dsst":
+            self.scale_filter = ScaleFilter(fp.dsst, w, h, soft=fp.feature != "hog")
+        self._training_memory = False
 
     @classmethod
     def own_params(cls, p: TrackerParams) -> Any:
@@ -187,11 +193,42 @@ class BaseFilter(ABC):
         windows: Sequence[Box],
         scales: Sequence[float] | None = None,
     ) -> list[Detection]:
-        """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
+        """Correlate the filter with each window; the peak displacement is mapped back to image pixels.
+
+        With the DSST scale estimator and several (scale) windows, only the middle window is correlated
+        (translation) and the scale filter, centred on its peak, gives the size factor: every entry of
+        the returned list is that one detection (same object), so callers indexing by window still work.
+        """
+        if self.scale_filter is not None and len(windows) > 1:
+            return self._detect_dsst(img, windows, scales)
         feats = self.features(img, windows)
         self._last_features = feats  # for `memory_score` of the winner (no second feature computation)
         responses = self.filter.respond(feats)
         return self._detections(responses, windows, scales if scales is not None else [1.0] * len(windows))
+
+    def _detect_dsst(
+        self, img: np.ndarray, windows: Sequence[Box], scales: Sequence[float] | None
+    ) -> list[Detection]:
+        """Translation on the middle window, then the size from the DSST scale filter (core/scale.py)."""
+        mid = len(windows) // 2
+        base = scales[mid] if scales is not None else 1.0
+        win = windows[mid]
+        feats = self.features(img, [win])
+        self._last_features = np.broadcast_to(feats, (len(windows), *feats.shape[1:]))
+        det = self._detections(self.filter.respond(feats), [win], [base])[0]
+        if self.scale_filter is not None and self.scale_filter.trained:
+            k = 1.0 + self.padding  # the window is (1 + padding) x the target
+            s = self.scale_filter.estimate(img, det.cx, det.cy, win.w / k, win.h / k)
+            det = dataclasses.replace(det, scale=base * s)
+        return [det] * len(windows)
+
+    def train_scale(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Train the DSST scale filter (if any) at `box`: rate 1 replaces it, else its own eta (eq. 5).
+        Not while the long-term memory learns (`train_memory`): the memory is a translation filter."""
+        sf = self.scale_filter
+        if sf is None or self._training_memory:
+            return
+        sf.train(img, box.cx, box.cy, box.w, box.h, 1.0 if rate >= 1.0 else sf.params.learning_rate)
 
     # ------------------------------------------------------------------ long-term memory (LCT style)
     def start_memory(self) -> None:
@@ -212,10 +249,12 @@ class BaseFilter(ABC):
     def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:
         """Blend the memory with the window around `box` at the (small) rate `rate`."""
         self.filter, self.memory = self.memory, self.filter
+        self._training_memory = True
         try:
             self.train(img, box, rate)
         finally:
             self.filter, self.memory = self.memory, self.filter
+            self._training_memory = False
 
     def _detections(
         self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]

@@ -1,0 +1,152 @@
+# SPDX-License-Identifier: Apache-2.0
+"""DSST scale filter: a 1-D correlation filter over a scale pyramid (Danelljan et al., BMVC 2014).
+
+"Accurate Scale Estimation for Robust Visual Tracking", Sec. 2-3 (the scale filter of the Discriminative
+Scale Space Tracker; also Danelljan et al., TPAMI 2017, "Discriminative Scale Space Tracking", Sec. 3).
+An option of the base filters (`KCFParams.scale_estimator = "dsst"`, same for DCF-CA): translation is
+found on the middle search window only, then this filter picks the size, instead of correlating the
+translation filter with 5 scaled windows (paper 000 Sec. III-B.2).
+
+For S scales n in {-(S-1)/2, ..., (S-1)/2} (scale step a), a patch of a^n w x a^n h pixels around the
+target centre is resampled to a fixed model size (at most `model_max_area` pixels, the first frame's
+aspect), its FHOG map flattened into one d-dimensional feature vector f(n); the training sample f is
+d x S, one 1-D signal per feature dimension l, weighted by a Hann window over the scales. With the 1-D
+Gaussian label g over the scale index (sigma = `sigma_factor` x sqrt(S) steps, centred on n = 0) and
+capital letters for DFTs over the scale axis:
+
+- eq. 4 (multi-channel solution): H^l = conj(G) F^l / (sum_k conj(F^k) F^k + lambda);
+- eq. 5 (update with learning rate eta): A_t^l = (1 - eta) A_{t-1}^l + eta conj(G) F_t^l,
+  B_t = (1 - eta) B_{t-1} + eta sum_k conj(F_t^k) F_t^k;
+- eq. 6 (detection on a sample z): y = F^-1{ sum_l conj(A^l) Z^l / (B + lambda) }, the new size being
+  a^n* times the current one at the maximum n* of y.
+
+Defaults are the paper's (Sec. 4): S = 33, a = 1.02, eta = 0.025, lambda = 0.01, sigma = 1/4 sqrt(S)
+steps (its code: nScales / sqrt(33) x 1/4, the same at S = 33), model area 512 px, FHOG cell 4.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import cv2
+import numpy as np
+import scipy.fft as sfft
+
+from swir_tracker_ros.core.fhog import fhog
+from swir_tracker_ros.errors import ParameterError, TrackerError
+from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
+
+SCALE_ESTIMATORS = ("search", "dsst")
+"""search: the translation filter on the scaled windows (paper 000); dsst: this module's scale filter."""
+
+CELL = 4  # FHOG cell of the scale samples (DSST)
+
+
+@dataclass
+class DSSTParams:
+    """The DSST scale filter (Danelljan et al., BMVC 2014, Sec. 4 defaults), for scale_estimator dsst."""
+
+    n_scales: int = _f(33, "S, scales sampled (odd; BMVC 2014: 33)", 3, 99)
+    scale_step: float = _f(1.02, "a, size ratio of neighbouring scales (BMVC 2014: 1.02)", 1.001, 1.2)
+    sigma_factor: float = _f(
+        0.25, "1-D Gaussian label sigma = factor x sqrt(n_scales) scale steps (BMVC 2014: 1/4)", 0.01, 2.0
+    )
+    lambda_: float = _f(0.01, "regularisation lambda of eq. 4 / 6 (BMVC 2014: 0.01)", 1e-8, 10.0)
+    learning_rate: float = _f(0.025, "eta of eq. 5 (BMVC 2014: 0.025)", 0.0, 1.0)
+    model_max_area: int = _f(
+        512, "scale samples are resampled to at most this many pixels (BMVC 2014 code: 512)", 64, 10000
+    )
+
+    def validate(self) -> None:
+        validate_params(self, "dsst.")
+
+    def check(self) -> None:
+        """n_scales must be odd (the label and the factors are centred on scale 1)."""
+        if self.n_scales % 2 == 0:
+            raise ParameterError(f"parameter dsst.n_scales = {self.n_scales} must be odd")
+
+
+@lru_cache(maxsize=8)
+def _label_spectrum(n: int, sigma: float) -> np.ndarray:
+    """rfft of the 1-D Gaussian label over the scale index, peak at the middle index (n = 0)."""
+    ss = np.arange(n) - n // 2
+    return sfft.rfft(np.exp(-0.5 * ss**2 / sigma**2)).astype(np.complex64)
+
+
+def scale_patches(
+    img: np.ndarray, cx: float, cy: float, w: float, h: float, factors: np.ndarray, out_w: int, out_h: int
+) -> np.ndarray:
+    """(S, out_h, out_w) float32: for each factor s the integer-pixel crop of floor(s w) x floor(s h)
+    around (cx, cy) (replicated borders, as DSST's get_scale_sample), resampled by area averaging
+    (`cv2.INTER_AREA`; bilinear when enlarging)."""
+    ih, iw = img.shape
+    pw = np.maximum(np.floor(w * factors).astype(int), 2)
+    ph = np.maximum(np.floor(h * factors).astype(int), 2)
+    x0 = math.floor(cx) - pw // 2
+    y0 = math.floor(cy) - ph // 2
+    rx0, ry0 = int(x0.min()), int(y0.min())
+    rx1, ry1 = int((x0 + pw).max()), int((y0 + ph).max())
+    if rx0 >= 0 and ry0 >= 0 and rx1 <= iw and ry1 <= ih:
+        region = img[ry0:ry1, rx0:rx1]
+    else:  # replicate the border: clipped index vectors (small region, one fancy-index copy)
+        region = img[np.ix_(np.clip(np.arange(ry0, ry1), 0, ih - 1), np.clip(np.arange(rx0, rx1), 0, iw - 1))]
+    out = np.empty((len(factors), out_h, out_w), dtype=np.float32)
+    for i in range(len(factors)):  # one resize per scale (S <= 99), never per pixel
+        sub = region[y0[i] - ry0 : y0[i] - ry0 + ph[i], x0[i] - rx0 : x0[i] - rx0 + pw[i]]
+        interp = cv2.INTER_AREA if pw[i] >= out_w and ph[i] >= out_h else cv2.INTER_LINEAR
+        cv2.resize(sub, (out_w, out_h), dst=out[i], interpolation=interp)
+    return out
+
+
+class ScaleFilter:
+    """DSST 1-D scale filter for a target whose first-frame size is w0 x h0 (module docstring)."""
+
+    def __init__(self, params: DSSTParams, w0: float, h0: float, soft: bool = True) -> None:
+        self.params = params
+        s = params.n_scales
+        self.factors = params.scale_step ** (np.arange(s) - s // 2)  # ascending, 1.0 in the middle
+        self.window = np.hanning(s).astype(np.float32)[:, None] if s > 2 else np.ones((s, 1), np.float32)
+        self.gf = _label_spectrum(s, params.sigma_factor * math.sqrt(s))[:, None]
+        k = math.sqrt(params.model_max_area / (w0 * h0)) if w0 * h0 > params.model_max_area else 1.0
+        self.model_w = max(2 * CELL, math.floor(w0 * k / CELL) * CELL)
+        self.model_h = max(2 * CELL, math.floor(h0 * k / CELL) * CELL)
+        self.soft = soft
+        self.num: np.ndarray | None = None  # conj(A) of eq. 5, (S//2+1, d)
+        self.den: np.ndarray | None = None  # B of eq. 5, (S//2+1, 1)
+
+    @property
+    def trained(self) -> bool:
+        return self.num is not None
+
+    def sample(self, img: np.ndarray, cx: float, cy: float, w: float, h: float) -> np.ndarray:
+        """The d x S training / test sample as an (S, d) float32 array, Hann-weighted over the scales."""
+        patches = scale_patches(img, cx, cy, w, h, self.factors, self.model_w, self.model_h)
+        feats = fhog(patches, CELL, soft=self.soft).reshape(len(self.factors), -1)
+        feats *= self.window
+        return feats
+
+    def train(self, img: np.ndarray, cx: float, cy: float, w: float, h: float, rate: float) -> None:
+        """Eq. 5 at the target box (cx, cy, w, h); rate 1 (or the first call) replaces the model."""
+        ff = sfft.rfft(self.sample(img, cx, cy, w, h), axis=0, workers=1)
+        num = self.gf * np.conj(ff)  # conj(conj(G) F) = G conj(F), kept conjugated for eq. 6
+        den = np.einsum("sd,sd->s", ff, np.conj(ff)).real[:, None]
+        if self.num is None or rate >= 1.0:
+            self.num, self.den = num, den
+        elif rate > 0.0:
+            self.num = (1.0 - rate) * self.num + rate * num
+            self.den = (1.0 - rate) * self.den + rate * den
+
+    def response(self, img: np.ndarray, cx: float, cy: float, w: float, h: float) -> np.ndarray:
+        """Eq. 6 over the S scales of the box (cx, cy, w, h); index i is the size factor `factors[i]`."""
+        if self.num is None or self.den is None:
+            raise TrackerError("ScaleFilter.response called before train")
+        zf = sfft.rfft(self.sample(img, cx, cy, w, h), axis=0, workers=1)
+        yf = np.einsum("sd,sd->s", self.num, zf)[:, None] / (self.den + self.params.lambda_)
+        return sfft.irfft(yf[:, 0], n=len(self.factors), workers=1)
+
+    def estimate(self, img: np.ndarray, cx: float, cy: float, w: float, h: float) -> float:
+        """Size factor a^n* of the best scale for a target of w x h centred at (cx, cy)."""
+        return float(self.factors[int(np.argmax(self.response(img, cx, cy, w, h)))])
