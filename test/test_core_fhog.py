@@ -145,8 +145,9 @@ def reference_sample_patch(img: np.ndarray, box: Box, out_w: int, out_h: int) ->
     return cv2.warpAffine(src, M, (out_w, out_h), flags=flags, borderMode=cv2.BORDER_REPLICATE)
 
 
-def test_sample_patch_blurs_only_the_read_rows_with_the_same_result(sequences_dir: Path) -> None:
-    """Windows inside, across and wholly outside the frame, shrinks from 0.2x to 6x."""
+def test_sample_patch_blurs_only_the_read_region_with_the_same_result(sequences_dir: Path) -> None:
+    """Windows inside, across and wholly outside the frame, shrinks from 0.2x to 6x: the blurred row band
+    and SIMD-aligned column band give the whole-frame blur's values exactly."""
     img, _ = frames_and_boxes(sequences_dir / "otb_jogging-1", (30,))[0]
     ih, iw = img.shape
     rng = np.random.default_rng(17)
