@@ -42,6 +42,9 @@ def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str
 def test_the_compiled_path_is_installed_and_used() -> None:
     """numba is pinned in requirements.txt: the tracker must not silently run the numpy fallback."""
     assert fhog.USE_JIT and fhog._jit() is not None
+    assert fhog.warm_up()
+    kernels = (fhog._jit().cell_histograms_kernel, fhog._jit().normalise_kernel)
+    assert all(k.signatures for k in kernels)  # compiled (or loaded from the cache) by warm_up
 
 
 def frames_and_boxes(seq: Path, picks: tuple[int, ...] = (0, 40, 80)) -> list[tuple[np.ndarray, Box]]:
