@@ -128,7 +128,7 @@ def test_window_inside_fhog_equals_windowing_the_result(sequences_dir: Path, pat
             fhog.fhog(patches, 4, window=np.ones((3, 3), np.float32))
 
 
-def test_gradients_match_the_reference_exactly(sequences_dir: Path) -> None:
+def test_gradients_match_the_reference_exactly(sequences_dir: Path, path: str) -> None:
     img, box = frames_and_boxes(sequences_dir / "ptbtir_airplane", (10,))[0]
     patches = tracker_patches(img, box)[0]
     mag, ang = fhog.gradients(patches)

@@ -144,14 +144,19 @@ def gradients(patches: np.ndarray, ws: _Workspace | None = None) -> tuple[np.nda
     n, h, w = patches.shape
     if ws is None:
         ws = _Workspace(n, h, w)
-    flat = patches.reshape(n * h, w)
-    gx = cv2.Sobel(flat, cv2.CV_32F, 1, 0, dst=ws.gx, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
-    gy = cv2.Sobel(flat, cv2.CV_32F, 0, 1, dst=ws.gy, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
-    gx3, gy3 = gx.reshape(n, h, w), gy.reshape(n, h, w)
-    np.subtract(patches[:, :, 1], patches[:, :, 0], out=gx3[:, :, 0])
-    np.subtract(patches[:, :, -1], patches[:, :, -2], out=gx3[:, :, -1])
-    np.subtract(patches[:, 1, :], patches[:, 0, :], out=gy3[:, 0, :])
-    np.subtract(patches[:, -1, :], patches[:, -2, :], out=gy3[:, -1, :])
+    jit = _jit()
+    if jit is not None and h >= 2 and w >= 2:  # one compiled pass (OpenCV's per-row overhead dominates
+        gx, gy = ws.gx, ws.gy  # on the tall, narrow stacks of many small patches)
+        jit.gradients_kernel(np.ascontiguousarray(patches, dtype=np.float32), gx, gy)
+    else:
+        flat = patches.reshape(n * h, w)
+        gx = cv2.Sobel(flat, cv2.CV_32F, 1, 0, dst=ws.gx, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+        gy = cv2.Sobel(flat, cv2.CV_32F, 0, 1, dst=ws.gy, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+        gx3, gy3 = gx.reshape(n, h, w), gy.reshape(n, h, w)
+        np.subtract(patches[:, :, 1], patches[:, :, 0], out=gx3[:, :, 0])
+        np.subtract(patches[:, :, -1], patches[:, :, -2], out=gx3[:, :, -1])
+        np.subtract(patches[:, 1, :], patches[:, 0, :], out=gy3[:, 0, :])
+        np.subtract(patches[:, -1, :], patches[:, -2, :], out=gy3[:, -1, :])
     mag, ang = cv2.cartToPolar(gx, gy, magnitude=ws.mag, angle=ws.ang)
     return mag.reshape(n, h, w), ang.reshape(n, h, w)
 

@@ -177,3 +177,30 @@ def normalise_kernel(
                 for q, s in enumerate((s0, s1, s2, s3)):
                     val = s * texture_weight
                     out[i, 3 * N_ORIENT + q, y, x] = val * wv if use_window else val
+
+
+@njit(cache=True, nogil=True)
+def gradients_kernel(patches: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> None:
+    """[-1, 0, 1] / 2 gradients of N patches (N, H, W) float32 into gx, gy (N*H, W); one-sided differences
+    (no halving) on the border rows and columns: the float32 operations of the reference's slices
+    (test/fhog_reference.py `gradients`, and of `cv2.Sobel` ksize 1 scale 0.5 in fhog.gradients)."""
+    n, h, w = patches.shape
+    half = np.float32(0.5)
+    for i in range(n):
+        for y in range(h):
+            row = patches[i, y]
+            ox = gx[i * h + y]
+            ox[0] = row[1] - row[0]
+            for x in range(1, w - 1):
+                ox[x] = (row[x + 1] - row[x - 1]) * half
+            ox[w - 1] = row[w - 1] - row[w - 2]
+            oy = gy[i * h + y]
+            if y == 0:
+                up, down, scale = patches[i, 0], patches[i, 1], False
+            elif y == h - 1:
+                up, down, scale = patches[i, h - 2], patches[i, h - 1], False
+            else:
+                up, down, scale = patches[i, y - 1], patches[i, y + 1], True
+            for x in range(w):
+                d = down[x] - up[x]
+                oy[x] = d * half if scale else d
