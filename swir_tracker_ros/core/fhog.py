@@ -77,6 +77,8 @@ class _Workspace:
             self.hist = np.empty((n, hc, wc * N_BINS), dtype=np.float32)
             self.energy = np.empty((hc + 2, wc + 2), dtype=np.float32)
             self.inv = np.empty((hc + 1, wc + 1), dtype=np.float32)
+            self.both = np.empty((3 * N_ORIENT, wc), dtype=np.float32)
+            self.tsum = np.empty((4, wc), dtype=np.float32)
         elif cell > 0:
             self.index = np.empty(4 * npx, dtype=np.intp)
             self.weight = np.empty(4 * npx, dtype=np.float64)  # = acc's dtype: ufunc.at's fast loop
@@ -312,7 +314,7 @@ def fhog(
             raise ValueError(f"window of shape {win.shape} for a {hc}x{wc} cell grid")
         jit.normalise_kernel(
             hist, _norm_eps(cell), np.float32(CLIP), np.float32(TEXTURE_WEIGHT), win, use_window,
-            ws.energy, ws.inv, out,
+            ws.energy, ws.inv, ws.both, ws.tsum, out,
         )
         return out
     out = _fhog_numpy(patches, cell, soft)

@@ -126,13 +126,16 @@ def normalise_kernel(
     use_window: bool,
     energy: np.ndarray,
     inv: np.ndarray,
+    both: np.ndarray,
+    tsum: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """FHOG block normalisation (fhog.fhog's numpy passes, in their order per element).
+    """FHOG block normalisation (fhog._fhog_numpy's passes, in their order per element).
 
-    hist: (N, hc, wc, 18) float32 cell histograms; energy (hc+2, wc+2), inv (hc+1, wc+1) float32 scratch;
-    out: (N, 31, hc, wc) float32; with use_window every value is then multiplied by window[y, x] (the
-    cosine window of features.extract_features, the same float32 product).
+    hist: (N, hc, wc, 18) float32 cell histograms; energy (hc+2, wc+2), inv (hc+1, wc+1), both (27, wc),
+    tsum (4, wc) float32 scratch; out: (N, 31, hc, wc) float32; with use_window every value is then
+    multiplied by window[y, x] (the cosine window of features.extract_features, the same float32
+    product). Each cell row is copied channel first so that the inner loops run along x (vectorised).
     """
     n, hc, wc, _ = hist.shape
     one, half, zero32 = np.float32(1.0), np.float32(0.5), np.float32(0.0)
@@ -156,27 +159,43 @@ def normalise_kernel(
                 b = energy[y, x] + energy[y + 1, x] + energy[y, x + 1] + energy[y + 1, x + 1]
                 inv[y, x] = one / np.sqrt(b + eps)
         for y in range(hc):
-            for x in range(wc):
+            for x in range(wc):  # the row channel first: 18 sensitive, then 9 insensitive sums
                 hh = hist[i, y, x]
-                n0, n1, n2, n3 = inv[y, x], inv[y, x + 1], inv[y + 1, x], inv[y + 1, x + 1]
-                s0 = s1 = s2 = s3 = zero32
-                wv = window[y, x] if use_window else one
-                for c in range(3 * N_ORIENT):
-                    v = hh[c] if c < N_BINS else hh[c - N_BINS] + hh[c - N_ORIENT]
-                    t0 = min(v * n0, clip)
-                    t1 = min(v * n1, clip)
-                    t2 = min(v * n2, clip)
-                    t3 = min(v * n3, clip)
-                    val = (((t0 + t1) + t2) + t3) * half
-                    out[i, c, y, x] = val * wv if use_window else val
-                    if c < N_BINS:
-                        s0 += t0
-                        s1 += t1
-                        s2 += t2
-                        s3 += t3
-                for q, s in enumerate((s0, s1, s2, s3)):
-                    val = s * texture_weight
-                    out[i, 3 * N_ORIENT + q, y, x] = val * wv if use_window else val
+                for c in range(N_BINS):
+                    both[c, x] = hh[c]
+                for c in range(N_ORIENT):
+                    both[N_BINS + c, x] = hh[c] + hh[c + N_ORIENT]
+            tsum[:] = zero32
+            for c in range(3 * N_ORIENT):  # the 4 blocks around each cell, truncated, averaged
+                src = both[c]
+                dst = out[i, c, y]
+                if c < N_BINS:  # sensitive channels also feed the 4 texture sums
+                    for x in range(wc):
+                        v = src[x]
+                        t0 = min(v * inv[y, x], clip)
+                        t1 = min(v * inv[y, x + 1], clip)
+                        t2 = min(v * inv[y + 1, x], clip)
+                        t3 = min(v * inv[y + 1, x + 1], clip)
+                        val = (((t0 + t1) + t2) + t3) * half
+                        dst[x] = val * window[y, x] if use_window else val
+                        tsum[0, x] += t0
+                        tsum[1, x] += t1
+                        tsum[2, x] += t2
+                        tsum[3, x] += t3
+                else:
+                    for x in range(wc):
+                        v = src[x]
+                        t0 = min(v * inv[y, x], clip)
+                        t1 = min(v * inv[y, x + 1], clip)
+                        t2 = min(v * inv[y + 1, x], clip)
+                        t3 = min(v * inv[y + 1, x + 1], clip)
+                        val = (((t0 + t1) + t2) + t3) * half
+                        dst[x] = val * window[y, x] if use_window else val
+            for q in range(4):
+                dst = out[i, 3 * N_ORIENT + q, y]
+                for x in range(wc):
+                    val = tsum[q, x] * texture_weight
+                    dst[x] = val * window[y, x] if use_window else val
 
 
 @njit(cache=True, nogil=True)
