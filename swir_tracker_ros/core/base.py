@@ -80,6 +80,7 @@ class BaseFilter(ABC):
         if getattr(fp, "scale_estimator", "search") == "dsst":
             self.scale_filter = ScaleFilter(fp.dsst, w, h, soft=fp.feature != "hog")
         self._training_memory = False
+        self._scratch_buffers: dict[str, np.ndarray] = {}
 
     @classmethod
     def own_params(cls, p: TrackerParams) -> Any:
@@ -181,10 +182,9 @@ class BaseFilter(ABC):
     def _scratch(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
         """A float32 work array of `shape` reused from frame to frame (fresh multi-MB arrays cost page
         faults on every frame: docs/speed.md); valid until the next call with the same name."""
-        bufs = self.__dict__.setdefault("_scratch_buffers", {})
-        buf = bufs.get(name)
+        buf = self._scratch_buffers.get(name)
         if buf is None or buf.shape != shape:
-            buf = bufs[name] = np.empty(shape, dtype=np.float32)
+            buf = self._scratch_buffers[name] = np.empty(shape, dtype=np.float32)
         return buf
 
     def detect(
