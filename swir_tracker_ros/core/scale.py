@@ -18,7 +18,10 @@ capital letters for DFTs over the scale axis:
 - eq. 5 (update with learning rate eta): A_t^l = (1 - eta) A_{t-1}^l + eta conj(G) F_t^l,
   B_t = (1 - eta) B_{t-1} + eta sum_k conj(F_t^k) F_t^k;
 - eq. 6 (detection on a sample z): y = F^-1{ sum_l conj(A^l) Z^l / (B + lambda) }, the new size being
-  a^n* times the current one at the maximum n* of y.
+  a^n* times the current one at the maximum n* of y. Here y is evaluated on `interpolation` points per
+  scale step by zero-padding its spectrum (the trigonometric interpolation of fDSST, Danelljan et al.,
+  TPAMI 2017, Sec. 4.2), so n* is fractional: with whole 2 % steps a slow size change (and the Kalman
+  size velocity) went unmeasured until it reached a step.
 
 Defaults are the paper's (Sec. 4): S = 33, a = 1.02, eta = 0.025, lambda = 0.01, sigma = 1/4 sqrt(S)
 steps (its code: nScales / sqrt(33) x 1/4, the same at S = 33), model area 512 px, FHOG cell 4.
