@@ -101,3 +101,19 @@ def test_tracker_with_dsst_follows_a_zoom(sequences_dir: Path, pipeline: str) ->
     dets = bank.detect(frames[-1], wins, [0.95, 1.0, 1.05])
     assert len(dets) == 3 and dets[0] is dets[1] is dets[2] and dets[0].window == wins[1]
     assert np.isfinite(bank.memory_score(2))  # any window index reads the middle window's features
+
+
+def test_interpolated_response_measures_changes_below_one_step(sequences_dir: Path) -> None:
+    """A 1.5 % zoom (below the 2 % step): whole steps can only answer 1.0 or 1.02; the interpolated response
+    (fDSST) lands between them and nearer the truth."""
+    img, box = real_frame(sequences_dir, "otb_walking2", 10)
+    coarse = ScaleFilter(DSSTParams(interpolation=1), box.w, box.h)
+    fine = ScaleFilter(DSSTParams(), box.w, box.h)
+    for sf in (coarse, fine):
+        sf.train(img, box.cx, box.cy, box.w, box.h, 1.0)
+    for z in (1.0 / 1.015, 1.015):
+        zoomed = zoom(img, box.cx, box.cy, z)
+        c = coarse.estimate(zoomed, box.cx, box.cy, box.w, box.h)
+        f = fine.estimate(zoomed, box.cx, box.cy, box.w, box.h)
+        assert min(abs(np.log(c) - k * np.log(1.02)) for k in (-1, 0, 1)) < 1e-9  # a whole step
+        assert abs(np.log(f / z)) < 0.5 * np.log(1.02) and abs(np.log(f / z)) < abs(np.log(c / z)), (z, c, f)
