@@ -1,16 +1,16 @@
 # SPDX-License-Identifier: Apache-2.0
 """Felzenszwalb HOG (FHOG, 31 channels) for a batch of equally sized patches, at compiled speed.
 
-Gradients are two `cv2.Sobel` calls and one `cv2.cartToPolar` on the stacked patches. The orientation
-binning, the bilinear scatter into cells and the block normalisation run as two compiled loops
-(core/fhog_jit.py, numba, pinned in requirements.txt): ~4 passes over the pixels' data instead of ~25
-numpy passes (docs/speed.md). Without numba the numpy path below is used: ONE `np.add.at` that scatters
-every pixel into its 2 orientation bins x 2 x cells, a row pooling over `cell` row phases, and the block
-normalisation on the (small) cell grid. Both give the numbers of the replaced `np.bincount` code
-exactly (float64 cell sums in its order, every float32 operation in its order): that implementation is
-kept in test/fhog_reference.py and test/test_core_fhog.py pins bit-identical results on real frames for
-both paths. Every pixel-sized array is a reused per-shape buffer (fresh multi-MB arrays cost a page
-fault per 4 kB; docs/speed.md).
+Three compiled loops (core/fhog_jit.py, numba, pinned in requirements.txt) do the gradients, the
+orientation binning with the bilinear scatter into cells, and the block normalisation (with the cosine
+window); `cv2.cartToPolar` gives magnitude and angle in between: ~5 passes over the pixels' data instead
+of ~25 numpy passes (docs/speed.md). Without numba the numpy path below is used: `cv2.Sobel` gradients,
+ONE `np.add.at` that scatters every pixel into its 2 orientation bins x 2 x cells, a row pooling over
+`cell` row phases, and the block normalisation on the (small) cell grid. Both give the numbers of the
+replaced `np.bincount` code exactly (float64 cell sums in its order, every float32 operation in its
+order): that implementation is kept in test/fhog_reference.py and test/test_core_fhog.py pins
+bit-identical results on real frames for both paths. Every pixel-sized array is a reused per-shape
+buffer (fresh multi-MB arrays cost a page fault per 4 kB; docs/speed.md).
 """
 
 from __future__ import annotations
@@ -85,10 +85,10 @@ class _Workspace:
             self.acc = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float64)
             self.acc32 = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float32)
         shape = (n * h, w)
-        self.gx, self.gy, self.mag, self.ang, self.o, self.m0, self.m1 = (
-            np.empty(shape, dtype=np.float32) for _ in range(7)
-        )
-        self.ob0, self.ob1 = np.empty(shape, dtype=np.intp), np.empty(shape, dtype=np.intp)
+        self.gx, self.gy, self.mag, self.ang = (np.empty(shape, dtype=np.float32) for _ in range(4))
+        if not jit:  # the numpy path's per-pixel bins and magnitude shares
+            self.o, self.m0, self.m1 = (np.empty(shape, dtype=np.float32) for _ in range(3))
+            self.ob0, self.ob1 = np.empty(shape, dtype=np.intp), np.empty(shape, dtype=np.intp)
 
 
 @lru_cache(maxsize=16)
