@@ -97,23 +97,27 @@ def summarise(times: list[float], cpu: float) -> dict:
 
 
 # ---------------------------------------------------------------------------------------------- ours
-def tracker_params(occlusion: bool):
+def tracker_params(occlusion: bool, estimator: str | None = None):
+    """Default TrackerParams; `estimator` overrides the default filter's scale_estimator (e.g. "dsst")."""
     from swir_tracker_ros.tracker import TrackerParams
 
-    if not occlusion:
-        return TrackerParams()
-    # occlusion mode: a PSR threshold no response reaches forces the 3x3 grid (full re-detection) every frame
-    params = TrackerParams(max_occluded_frames=100000)
-    params.kcf.psr_threshold = 100.0
+    params = TrackerParams(max_occluded_frames=100000) if occlusion else TrackerParams()
+    if estimator is not None:
+        params.filter_params().scale_estimator = estimator
+    if occlusion:
+        # a PSR threshold no response reaches forces the 3x3 grid (full re-detection) every frame
+        params.kcf.psr_threshold = 100.0
     return params
 
 
-def time_ours(frames: np.ndarray, box: tuple[float, ...], occlusion: bool) -> dict:
+def time_ours(
+    frames: np.ndarray, box: tuple[float, ...], occlusion: bool, estimator: str | None = None
+) -> dict:
     """Per-frame wall times of our default tracker; `frac` = share of frames in the requested mode."""
     from swir_tracker_ros.tracker import Tracker
     from swir_tracker_ros.types import Box, SearchMode
 
-    trk = Tracker(tracker_params(occlusion))
+    trk = Tracker(tracker_params(occlusion, estimator))
     trk.init(frames[0], Box(*box))
     want = SearchMode.MULTI_WINDOW if occlusion else SearchMode.NORMAL
     hits = 0
@@ -180,6 +184,9 @@ STAGES = (
     ("swir_tracker_ros.core.kcf", "KCF.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.dcf_ca", "DCFCA.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.confidence", "analyse", "peak/PSR analysis", False),
+    ("swir_tracker_ros.core.scale", "scale_patches", "sampling", False),
+    ("swir_tracker_ros.core.scale", "ScaleFilter.response", "dsst scale filter", False),
+    ("swir_tracker_ros.core.scale", "ScaleFilter.train", "dsst scale filter", False),
     ("swir_tracker_ros.core.base", "BaseFilter.detect", "scale search", True),
     ("swir_tracker_ros.core.base", "BaseFilter.detect_grid", "grid", True),
     ("swir_tracker_ros.core.base", "BaseFilter.train_memory", "model update", True),
@@ -233,7 +240,9 @@ def install_stage_timers(timer: StageTimer) -> list[tuple[object, str, object]]:
     return restore
 
 
-def profile_ours(frames: np.ndarray, box: tuple[float, ...], occlusion: bool) -> dict[str, float]:
+def profile_ours(
+    frames: np.ndarray, box: tuple[float, ...], occlusion: bool, estimator: str | None = None
+) -> dict[str, float]:
     """ms per frame per stage (exclusive) and per phase (inclusive, keys 'phase: ...')."""
     from swir_tracker_ros.tracker import Tracker
     from swir_tracker_ros.types import Box
@@ -241,7 +250,7 @@ def profile_ours(frames: np.ndarray, box: tuple[float, ...], occlusion: bool) ->
     timer = StageTimer()
     restore = install_stage_timers(timer)
     try:
-        trk = Tracker(tracker_params(occlusion))
+        trk = Tracker(tracker_params(occlusion, estimator))
         trk.init(frames[0], Box(*box))
         timer.excl.clear()
         timer.incl.clear()
@@ -337,6 +346,18 @@ def fft_libraries() -> dict[str, float]:
             for p in flat
         ]
 
+    rows = np.ascontiguousarray(flat.reshape(-1, shape[1]))
+    nplanes, half = flat.shape[0], shape[1] // 2 + 1
+
+    def cv2_rows() -> object:
+        # batched: one DFT_ROWS call over every row of every plane (real -> CCS-free complex), the kept
+        # half columns transposed into rows, a second DFT_ROWS call over them; the inverse the same way back
+        f = cv2.dft(rows, flags=cv2.DFT_ROWS | cv2.DFT_COMPLEX_OUTPUT)[:, :half]
+        cols = np.ascontiguousarray(f.reshape(nplanes, shape[0], half, 2).transpose(0, 2, 1, 3))
+        spec = cv2.dft(cols.reshape(-1, shape[0], 2), flags=cv2.DFT_ROWS)
+        back = cv2.dft(spec, flags=cv2.DFT_ROWS | cv2.DFT_INVERSE | cv2.DFT_SCALE)
+        return back
+
     from swir_tracker_ros.core import kcf
 
     def ours() -> object:
@@ -346,6 +367,7 @@ def fft_libraries() -> dict[str, float]:
         "scipy.fft rfft2+irfft2 (float32)": best_of(scipy_),
         "numpy.fft rfft2+irfft2 (float64)": best_of(numpy_),
         "cv2.dft per plane fwd+inv": best_of(cv2_),
+        "cv2.dft DFT_ROWS batched, fwd + col inv only": best_of(cv2_rows),
         "core.kcf rfft2+irfft2 (chosen)": best_of(ours),
     }
 
@@ -461,16 +483,19 @@ def main() -> None:
         res = {
             "normal": time_ours(frames, box, occlusion=False),
             "occlusion": time_ours(frames, box, occlusion=True),
+            "dsst": time_ours(frames, box, occlusion=False, estimator="dsst"),
         }
         res.update(time_opencv(to8bit(frames), box))
         results[tag] = res
         profiles[tag] = profile_ours(frames, box, occlusion=False)
         if size == HEADLINE:
             profiles[f"{tag} occlusion"] = profile_ours(frames, box, occlusion=True)
+            profiles[f"{tag} dsst"] = profile_ours(frames, box, occlusion=False, estimator="dsst")
 
     names = {
         "normal": "ours normal (5 scales)",
         "occlusion": "ours occlusion (5 scales + grid)",
+        "dsst": "ours normal, dsst option (1 window)",
         "csrt": "OpenCV CSRT",
         "kcf": "OpenCV KCF default (CN+gray)",
         "kcf_gray": "OpenCV KCF gray, 1 channel",
@@ -487,11 +512,12 @@ def main() -> None:
                     f"{r['max_ms']:8.2f}{extra}"
                 )
     head = results[f"{HEADLINE[0]}x{HEADLINE[1]}"]
-    for peer in ("csrt", "kcf", "kcf_gray"):
-        if peer in head:
-            ratio = head["normal"]["fps"] / head[peer]["fps"]
-            cpu = head["normal"]["cpu_fps"] / head[peer]["cpu_fps"]
-            print(f"  ratio normal / {names[peer]:28s} at 40x100: {ratio:.2f} (cpu {cpu:.2f})")
+    for ours in ("normal", "dsst"):
+        for peer in ("csrt", "kcf", "kcf_gray"):
+            if peer in head:
+                ratio = head[ours]["fps"] / head[peer]["fps"]
+                cpu = head[ours]["cpu_fps"] / head[peer]["cpu_fps"]
+                print(f"  ratio {ours:6s} / {names[peer]:28s} at 40x100: {ratio:.2f} (cpu {cpu:.2f})")
 
     print("\nper-stage profile of the default pipeline, CPU ms/frame (stages exclusive; phases inclusive)")
     keys = sorted(
@@ -512,6 +538,7 @@ def main() -> None:
         "opencv_kcf_gray_fps": fps("40x100", "kcf_gray"),
         "p95_ms_80x200": round(results["80x200"]["normal"]["p95_ms"], 2),
         "p95_ms_80x200_occlusion": round(results["80x200"]["occlusion"]["p95_ms"], 2),
+        "dsst_fps": fps("40x100", "dsst"),
         "opencv_version": prim["version"],
     }
     for tag in results:

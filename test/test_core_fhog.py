@@ -9,6 +9,7 @@ the grid-union sizes), both feature kinds.
 Tolerance: none. The new FHOG sums every cell in float64 in the reference's order and keeps every other
 float32 operation's order, so features and histograms are bit-identical (a speed change must not move a
 score: a float32 accumulator, ~1e-7 off, moved the ci regression set's t3 robust_adaptive AUC by 0.006).
+Both FHOG paths are pinned: the compiled loops (core/fhog_jit.py, numba) and the numpy fallback.
 """
 
 from __future__ import annotations
@@ -29,6 +30,21 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fhog_reference as ref
 
 SEQS = ("otb_jogging-1", "ptbtir_airplane", "otb_crossing", "vottir2015_horse")
+
+
+@pytest.fixture(params=["jit", "numpy"])
+def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Run the test on the compiled FHOG loops and on the numpy fallback."""
+    monkeypatch.setattr(fhog, "USE_JIT", request.param == "jit")
+    return request.param
+
+
+def test_the_compiled_path_is_installed_and_used() -> None:
+    """numba is pinned in requirements.txt: the tracker must not silently run the numpy fallback."""
+    assert fhog.USE_JIT and fhog._jit() is not None
+    assert fhog.warm_up()
+    kernels = (fhog._jit().cell_histograms_kernel, fhog._jit().normalise_kernel)
+    assert all(k.signatures for k in kernels)  # compiled (or loaded from the cache) by warm_up
 
 
 def frames_and_boxes(seq: Path, picks: tuple[int, ...] = (0, 40, 80)) -> list[tuple[np.ndarray, Box]]:
@@ -52,7 +68,7 @@ def tracker_patches(img: np.ndarray, box: Box, padding: float = 1.5, cell: int =
 
 @pytest.mark.parametrize("seq", SEQS)
 @pytest.mark.parametrize("soft", [False, True], ids=["hog", "hog_soft"])
-def test_fhog_equals_reference_on_real_frames(sequences_dir: Path, seq: str, soft: bool) -> None:
+def test_fhog_equals_reference_on_real_frames(sequences_dir: Path, seq: str, soft: bool, path: str) -> None:
     for img, box in frames_and_boxes(sequences_dir / seq):
         for patches in tracker_patches(img, box):
             got = fhog.fhog(patches, 4, soft=soft)
@@ -65,7 +81,9 @@ def test_fhog_equals_reference_on_real_frames(sequences_dir: Path, seq: str, sof
 
 
 @pytest.mark.parametrize("shape", [(1, 83, 57), (3, 33, 18), (2, 16, 16)])
-def test_fhog_equals_reference_off_the_cell_grid(sequences_dir: Path, shape: tuple[int, int, int]) -> None:
+def test_fhog_equals_reference_off_the_cell_grid(
+    sequences_dir: Path, shape: tuple[int, int, int], path: str
+) -> None:
     """Sizes that are not whole cells (extra columns feed the last cell, extra rows are dropped)."""
     img, _ = frames_and_boxes(sequences_dir / "otb_crossing", (5,))[0]
     n, h, w = shape
@@ -74,7 +92,7 @@ def test_fhog_equals_reference_off_the_cell_grid(sequences_dir: Path, shape: tup
         np.testing.assert_array_equal(fhog.fhog(patches, 4, soft), ref.fhog(patches, 4, soft))
 
 
-def test_fhog_results_survive_the_reused_buffers(sequences_dir: Path) -> None:
+def test_fhog_results_survive_the_reused_buffers(sequences_dir: Path, path: str) -> None:
     """The per-shape work buffers are reused: an earlier result must not change on a later call."""
     (a_img, a_box), (b_img, _) = frames_and_boxes(sequences_dir / "otb_jogging-1", (0, 120))
     pa = tracker_patches(a_img, a_box)[0]
@@ -89,7 +107,28 @@ def test_fhog_results_survive_the_reused_buffers(sequences_dir: Path) -> None:
     np.testing.assert_array_equal(ha, keep_h)
 
 
-def test_gradients_match_the_reference_exactly(sequences_dir: Path) -> None:
+def test_window_inside_fhog_equals_windowing_the_result(sequences_dir: Path, path: str) -> None:
+    """`fhog(..., window=)` (the compiled path multiplies inside its loop) and `extract_features` give the
+    numbers of multiplying the finished features by the cosine window."""
+    img, box = frames_and_boxes(sequences_dir / "otb_crossing", (20,))[0]
+    patches = tracker_patches(img, box)[0]
+    for kind in features.HOG_KINDS:
+        plain = fhog.fhog(patches, 4, soft=kind == "hog_soft")
+        win = features.cosine_window(plain.shape[2], plain.shape[3])
+        want = plain * win
+        got = fhog.fhog(patches, 4, soft=kind == "hog_soft", window=win)
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(features.extract_features(patches, kind, 4), want)
+        np.testing.assert_array_equal(
+            features.extract_features(patches, kind, 4),
+            ref.fhog(patches, 4, soft=kind == "hog_soft") * win,
+        )
+    if path == "jit":  # a window of the wrong size is refused, not read out of bounds
+        with pytest.raises(ValueError):
+            fhog.fhog(patches, 4, window=np.ones((3, 3), np.float32))
+
+
+def test_gradients_match_the_reference_exactly(sequences_dir: Path, path: str) -> None:
     img, box = frames_and_boxes(sequences_dir / "ptbtir_airplane", (10,))[0]
     patches = tracker_patches(img, box)[0]
     mag, ang = fhog.gradients(patches)
@@ -109,8 +148,9 @@ def reference_sample_patch(img: np.ndarray, box: Box, out_w: int, out_h: int) ->
     return cv2.warpAffine(src, M, (out_w, out_h), flags=flags, borderMode=cv2.BORDER_REPLICATE)
 
 
-def test_sample_patch_blurs_only_the_read_rows_with_the_same_result(sequences_dir: Path) -> None:
-    """Windows inside, across and wholly outside the frame, shrinks from 0.2x to 6x."""
+def test_sample_patch_blurs_only_the_read_region_with_the_same_result(sequences_dir: Path) -> None:
+    """Windows inside, across and wholly outside the frame, shrinks from 0.2x to 6x: the blurred row band
+    and SIMD-aligned column band give the whole-frame blur's values exactly."""
     img, _ = frames_and_boxes(sequences_dir / "otb_jogging-1", (30,))[0]
     ih, iw = img.shape
     rng = np.random.default_rng(17)

@@ -9,6 +9,7 @@ gate, its peak -> Huber threshold map and its Kalman box model. `Tracker` select
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
@@ -27,6 +28,7 @@ from swir_tracker_ros.core.features import (
     unwindowed_features,
 )
 from swir_tracker_ros.core.params import TrackerParams
+from swir_tracker_ros.core.scale import ScaleFilter
 from swir_tracker_ros.core.windows import template_size
 from swir_tracker_ros.kalman import BoxModel, ThresholdMap
 from swir_tracker_ros.types import Box
@@ -74,6 +76,11 @@ class BaseFilter(ABC):
         self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
         self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
         self.filter = self._build()
+        self.scale_filter: ScaleFilter | None = None  # DSST option (core/scale.py), else the scale search
+        if getattr(fp, "scale_estimator", "search") == "dsst":
+            self.scale_filter = ScaleFilter(fp.dsst, w, h, soft=fp.feature != "hog")
+        self._training_memory = False
+        self._scratch_buffers: dict[str, np.ndarray] = {}
 
     @classmethod
     def own_params(cls, p: TrackerParams) -> Any:
@@ -125,24 +132,36 @@ class BaseFilter(ABC):
         return sx, sy, wins
 
     def grid_features(
-        self, img: np.ndarray, window: Box, overlap: float, keep: Sequence[int] = tuple(range(9))
+        self,
+        img: np.ndarray,
+        window: Box,
+        overlap: float,
+        keep: Sequence[int] = tuple(range(9)),
+        out: np.ndarray | None = None,
     ) -> tuple[np.ndarray, list[Box]]:
         """Windowed feature maps (len(keep), C, rows, cols) of the grid windows `keep` (row-major indices
         of the 3x3 grid) from ONE feature computation, and all 9 grid windows.
 
         The union of the 9 windows is resampled once at the template scale, its features computed once,
         and each kept window's map cut out of it (the windows sit on whole cells of the union), so the grid
-        costs (1 + 2 (1 - overlap))^2 ~ 5.4 windows of features instead of 9.
+        costs (1 + 2 (1 - overlap))^2 ~ 5.4 windows of features instead of 9. `out`: optional float32
+        array of the result's shape written in place.
         """
         sx, sy, wins = self.grid_geometry(window, overlap)
         c = self.cell
         uw, uh = self.tw + 2 * sx * c, self.th + 2 * sy * c
         kx, ky = window.w / self.tw, window.h / self.th
         union = Box.from_center(window.cx, window.cy, uw * kx, uh * ky)
-        feats = unwindowed_features(sample_patch(img, union, uw, uh)[None], self.kind, c)[0]
+        if img.dtype == np.float32 and img.ndim == 2:  # the conditioned frame: warp into a reused array
+            patch = self._scratch("grid union patch", (1, uh, uw))
+            sample_patch(img, union, uw, uh, out=patch[0])
+        else:
+            patch = sample_patch(img, union, uw, uh)[None]
+        feats = unwindowed_features(patch, self.kind, c)[0]
         fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
         win = cosine_window(fh, fw)
-        out = np.empty((len(keep), feats.shape[0], fh, fw), dtype=np.float32)
+        if out is None:
+            out = np.empty((len(keep), feats.shape[0], fh, fw), dtype=np.float32)
         for i, k in enumerate(keep):  # slices of the union map (steps are whole cells; gray: cell = 1 px)
             r0, c0 = (k // 3) * sy, (k % 3) * sx
             np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[i])
@@ -154,10 +173,19 @@ class BaseFilter(ABC):
         """Detections in the 3x3 re-detection grid around `window` (the centre one left out if asked,
         as normal mode already correlated it) and the 9 grid windows; `scale` is copied to each."""
         keep = [k for k in range(9) if not (skip_centre and k == 4)]
-        feats, wins = self.grid_features(img, window, overlap, keep)
+        buf = self._scratch("grid features", (len(keep), *self.shape))  # consumed by `respond` below
+        feats, wins = self.grid_features(img, window, overlap, keep, out=buf)
         responses = self.filter.respond(feats)
         dets = self._detections(responses, [wins[k] for k in keep], [scale] * len(keep))
         return dets, wins
+
+    def _scratch(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
+        """A float32 work array of `shape` reused from frame to frame (fresh multi-MB arrays cost page
+        faults on every frame: docs/speed.md); valid until the next call with the same name."""
+        buf = self._scratch_buffers.get(name)
+        if buf is None or buf.shape != shape:
+            buf = self._scratch_buffers[name] = np.empty(shape, dtype=np.float32)
+        return buf
 
     def detect(
         self,
@@ -165,7 +193,14 @@ class BaseFilter(ABC):
         windows: Sequence[Box],
         scales: Sequence[float] | None = None,
     ) -> list[Detection]:
-        """Correlate the filter with each window; the peak displacement is mapped back to image pixels."""
+        """Correlate the filter with each window; the peak displacement is mapped back to image pixels.
+
+        With the DSST scale estimator and several (scale) windows, only the middle window is correlated
+        (translation) and the scale filter, centred on its peak, gives the size factor: every entry of
+        the returned list is that one detection (same object), so callers indexing by window still work.
+        """
+        if self.scale_filter is not None and len(windows) > 1:
+            return self._detect_dsst(img, windows, scales)
         feats = self.features(img, windows)
         self._last_features = feats  # for `memory_score` of the winner (no second feature computation)
         responses = self.filter.respond(feats)
@@ -239,6 +274,30 @@ class BaseFilter(ABC):
         responses = self.filter.respond(out)
         return self._detections(responses, wins, [scale] * len(wins)), wins
 
+    def _detect_dsst(
+        self, img: np.ndarray, windows: Sequence[Box], scales: Sequence[float] | None
+    ) -> list[Detection]:
+        """Translation on the middle window, then the size from the DSST scale filter (core/scale.py)."""
+        mid = len(windows) // 2
+        base = scales[mid] if scales is not None else 1.0
+        win = windows[mid]
+        feats = self.features(img, [win])
+        self._last_features = np.broadcast_to(feats, (len(windows), *feats.shape[1:]))
+        det = self._detections(self.filter.respond(feats), [win], [base])[0]
+        if self.scale_filter is not None and self.scale_filter.trained:
+            k = 1.0 + self.padding  # the window is (1 + padding) x the target
+            s = self.scale_filter.estimate(img, det.cx, det.cy, win.w / k, win.h / k)
+            det = dataclasses.replace(det, scale=base * s)
+        return [det] * len(windows)
+
+    def train_scale(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Train the DSST scale filter (if any) at `box`: rate 1 replaces it, else its own eta (eq. 5).
+        Not while the long-term memory learns (`train_memory`): the memory is a translation filter."""
+        sf = self.scale_filter
+        if sf is None or self._training_memory:
+            return
+        sf.train(img, box.cx, box.cy, box.w, box.h, 1.0 if rate >= 1.0 else sf.params.learning_rate)
+
     # ------------------------------------------------------------------ long-term memory (LCT style)
     def start_memory(self) -> None:
         """Keep a copy of the first-frame filter as the long-term memory of the target.
@@ -258,10 +317,12 @@ class BaseFilter(ABC):
     def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:
         """Blend the memory with the window around `box` at the (small) rate `rate`."""
         self.filter, self.memory = self.memory, self.filter
+        self._training_memory = True
         try:
             self.train(img, box, rate)
         finally:
             self.filter, self.memory = self.memory, self.filter
+            self._training_memory = False
 
     def _detections(
         self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]

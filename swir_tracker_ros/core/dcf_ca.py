@@ -3,12 +3,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
 from swir_tracker_ros.core.kcf import gaussian_label_spectrum, irfft2, linear_correlation, rfft2
+from swir_tracker_ros.core.scale import SCALE_ESTIMATORS, DSSTParams
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
@@ -41,6 +42,15 @@ class DCFCAParams:
     )
     apce_update_ratio: float = _f(
         0.583, "no model update when APCE <= ratio x mean (eq. 4.97)", 0.0, 2.0
+    )
+    scale_estimator: str = _f(
+        "search",
+        "size estimation: search (the filter on every scaled window) or dsst (Danelljan et al., BMVC "
+        "2014: translation on the middle window only, then a 1-D scale filter; core/scale.py)",
+        choices=SCALE_ESTIMATORS,
+    )
+    dsst: DSSTParams = field(
+        default_factory=DSSTParams, metadata={"doc": "DSST scale filter (core/scale.py)"}
     )
 
     def validate(self) -> None:

@@ -1,18 +1,22 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Felzenszwalb HOG (FHOG, 31 channels) for a batch of equally sized patches, from compiled primitives.
+"""Felzenszwalb HOG (FHOG, 31 channels) for a batch of equally sized patches, at compiled speed.
 
-Per frame the work is a handful of passes over the pixels, each one OpenCV or numpy call: `cv2.Sobel`
-gradients, `cv2.cartToPolar`, the orientation bins, ONE `np.add.at` that scatters every pixel into its
-2 orientation bins x 2 x cells, a row pooling over `cell` row phases, and the block normalisation on the
-(small) cell grid. Every pixel-sized array is a reused per-shape buffer (fresh multi-MB arrays cost a
-page fault per 4 kB; docs/speed.md). Everything is float32 except the scatter's float64 weights and sums,
-which reproduce the replaced `np.bincount` exactly. That implementation is kept in
-test/fhog_reference.py; test/test_core_fhog.py pins bit-identical results on real frames.
+Three compiled loops (core/fhog_jit.py, numba, pinned in requirements.txt) do the gradients, the
+orientation binning with the bilinear scatter into cells, and the block normalisation (with the cosine
+window); `cv2.cartToPolar` gives magnitude and angle in between: ~5 passes over the pixels' data instead
+of ~25 numpy passes (docs/speed.md). Without numba the numpy path below is used: `cv2.Sobel` gradients,
+ONE `np.add.at` that scatters every pixel into its 2 orientation bins x 2 x cells, a row pooling over
+`cell` row phases, and the block normalisation on the (small) cell grid. Both give the numbers of the
+replaced `np.bincount` code exactly (float64 cell sums in its order, every float32 operation in its
+order): that implementation is kept in test/fhog_reference.py and test/test_core_fhog.py pins
+bit-identical results on real frames for both paths. Every pixel-sized array is a reused per-shape
+buffer (fresh multi-MB arrays cost a page fault per 4 kB; docs/speed.md).
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
+from types import ModuleType
 
 import cv2
 import numpy as np
@@ -60,24 +64,75 @@ class _Workspace:
     """Per-shape buffers of `cell_histograms`, reused from frame to frame (a fresh multi-MB array costs
     page faults on every call: measured 10 of 16 ms a call on the development machine, docs/speed.md)."""
 
-    def __init__(self, n: int, h: int, w: int, cell: int = 0) -> None:
-        """Buffers for N patches of H x W pixels; with cell > 0 also the scatter buffers."""
+    def __init__(self, n: int, h: int, w: int, cell: int = 0, jit: bool = False) -> None:
+        """Buffers for N patches of H x W pixels; with cell > 0 also the scatter buffers of the numpy
+        path, or with `jit` the (much smaller) scratch of the compiled loops."""
         npx = n * h * w
-        if cell > 0:
+        if cell > 0 and jit:
+            hc, wc = h // cell, w // cell
+            self.row_acc = np.empty(wc * N_BINS, dtype=np.float64)
+            self.hx = np.empty((n * h, wc * N_BINS), dtype=np.float32)
+            self.ob0_row, self.ob1_row = np.empty(w, dtype=np.intp), np.empty(w, dtype=np.intp)
+            self.m0_row, self.m1_row = np.empty(w, dtype=np.float32), np.empty(w, dtype=np.float32)
+            self.hist = np.empty((n, hc, wc * N_BINS), dtype=np.float32)
+            self.energy = np.empty((hc + 2, wc + 2), dtype=np.float32)
+            self.inv = np.empty((hc + 1, wc + 1), dtype=np.float32)
+            self.both = np.empty((3 * N_ORIENT, wc), dtype=np.float32)
+            self.tsum = np.empty((4, wc), dtype=np.float32)
+        elif cell > 0:
             self.index = np.empty(4 * npx, dtype=np.intp)
             self.weight = np.empty(4 * npx, dtype=np.float64)  # = acc's dtype: ufunc.at's fast loop
             self.acc = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float64)
             self.acc32 = np.empty(n * h * (w // cell) * N_BINS, dtype=np.float32)
         shape = (n * h, w)
-        self.gx, self.gy, self.mag, self.ang, self.o, self.m0, self.m1 = (
-            np.empty(shape, dtype=np.float32) for _ in range(7)
-        )
-        self.ob0, self.ob1 = np.empty(shape, dtype=np.intp), np.empty(shape, dtype=np.intp)
+        self.gx, self.gy, self.mag, self.ang = (np.empty(shape, dtype=np.float32) for _ in range(4))
+        if not jit:  # the numpy path's per-pixel bins and magnitude shares
+            self.o, self.m0, self.m1 = (np.empty(shape, dtype=np.float32) for _ in range(3))
+            self.ob0, self.ob1 = np.empty(shape, dtype=np.intp), np.empty(shape, dtype=np.intp)
 
 
 @lru_cache(maxsize=16)
-def _workspace(n: int, h: int, w: int, cell: int) -> _Workspace:
-    return _Workspace(n, h, w, cell)
+def _workspace(n: int, h: int, w: int, cell: int, jit: bool = False) -> _Workspace:
+    return _Workspace(n, h, w, cell, jit)
+
+
+USE_JIT = True
+"""Use the compiled loops (core/fhog_jit.py) when numba is importable; False forces the numpy path."""
+
+
+@lru_cache(maxsize=1)
+def _jit_module() -> ModuleType | None:
+    """core/fhog_jit.py, or None when numba is not installed (imported on first use: numba's import
+    costs ~0.6 s, its first compile ~2 s a loop, then loaded from its on-disk cache)."""
+    try:
+        from swir_tracker_ros.core import fhog_jit
+    except ImportError:
+        return None
+    return fhog_jit
+
+
+def _jit() -> ModuleType | None:
+    return _jit_module() if USE_JIT else None
+
+
+def warm_up() -> bool:
+    """Import numba and load (on a fresh install: compile, ~4 s) the compiled loops now rather than on the
+    first frame; ~1 s with numba's on-disk cache. For a node to call at start-up. True if they are in use."""
+    if _jit() is None:
+        return False
+    fhog(np.zeros((1, 8, 8), dtype=np.float32), 4, soft=True, window=np.ones((2, 2), dtype=np.float32))
+    return True
+
+
+@lru_cache(maxsize=8)
+def _pool_plan(cell: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per row phase r of a cell (`_pool_rows`): float32 weight of its own cell row, of the neighbouring
+    cell row, and the neighbour's direction (+1 below for d < 0, -1 above for d > 0, 0 at d = 0)."""
+    d = [(r + 0.5) / cell - 0.5 for r in range(cell)]
+    own = np.array([np.float32(1.0 - abs(v)) for v in d], dtype=np.float32)
+    nb = np.array([np.float32(abs(v)) for v in d], dtype=np.float32)
+    direction = np.array([1 if v < 0 else -1 if v > 0 else 0 for v in d], dtype=np.intp)
+    return own, nb, direction
 
 
 def gradients(patches: np.ndarray, ws: _Workspace | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -91,14 +146,19 @@ def gradients(patches: np.ndarray, ws: _Workspace | None = None) -> tuple[np.nda
     n, h, w = patches.shape
     if ws is None:
         ws = _Workspace(n, h, w)
-    flat = patches.reshape(n * h, w)
-    gx = cv2.Sobel(flat, cv2.CV_32F, 1, 0, dst=ws.gx, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
-    gy = cv2.Sobel(flat, cv2.CV_32F, 0, 1, dst=ws.gy, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
-    gx3, gy3 = gx.reshape(n, h, w), gy.reshape(n, h, w)
-    np.subtract(patches[:, :, 1], patches[:, :, 0], out=gx3[:, :, 0])
-    np.subtract(patches[:, :, -1], patches[:, :, -2], out=gx3[:, :, -1])
-    np.subtract(patches[:, 1, :], patches[:, 0, :], out=gy3[:, 0, :])
-    np.subtract(patches[:, -1, :], patches[:, -2, :], out=gy3[:, -1, :])
+    jit = _jit()
+    if jit is not None and h >= 2 and w >= 2:  # one compiled pass (OpenCV's per-row overhead dominates
+        gx, gy = ws.gx, ws.gy  # on the tall, narrow stacks of many small patches)
+        jit.gradients_kernel(np.ascontiguousarray(patches, dtype=np.float32), gx, gy)
+    else:
+        flat = patches.reshape(n * h, w)
+        gx = cv2.Sobel(flat, cv2.CV_32F, 1, 0, dst=ws.gx, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+        gy = cv2.Sobel(flat, cv2.CV_32F, 0, 1, dst=ws.gy, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+        gx3, gy3 = gx.reshape(n, h, w), gy.reshape(n, h, w)
+        np.subtract(patches[:, :, 1], patches[:, :, 0], out=gx3[:, :, 0])
+        np.subtract(patches[:, :, -1], patches[:, :, -2], out=gx3[:, :, -1])
+        np.subtract(patches[:, 1, :], patches[:, 0, :], out=gy3[:, 0, :])
+        np.subtract(patches[:, -1, :], patches[:, -2, :], out=gy3[:, -1, :])
     mag, ang = cv2.cartToPolar(gx, gy, magnitude=ws.mag, angle=ws.ang)
     return mag.reshape(n, h, w), ang.reshape(n, h, w)
 
@@ -173,6 +233,9 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
     if patches.ndim == 2:
         patches = patches[None]
     patches = np.ascontiguousarray(patches, dtype=np.float32)
+    jit = _jit()
+    if jit is not None:
+        return _jit_histograms(jit, patches, cell, soft).copy()  # the caller owns its result
     n, h, w = patches.shape
     ws = _workspace(n, h, w, cell)
     mag, ang = gradients(patches, ws)
@@ -200,6 +263,20 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
     return _pool_rows(acc32.reshape(n, h, wc * N_BINS), cell).reshape(n, hc, wc, N_BINS)
 
 
+def _jit_histograms(jit: ModuleType, patches: np.ndarray, cell: int, soft: bool) -> np.ndarray:
+    """`cell_histograms` by the compiled loop, (N, hc, wc, 18) in a reused buffer (overwritten by the next
+    call for the same shape)."""
+    n, h, w = patches.shape
+    ws = _workspace(n, h, w, cell, True)
+    mag, ang = gradients(patches, ws)
+    x0, x1, wx0, wx1 = _axis_plan(w, cell)
+    jit.cell_histograms_kernel(
+        mag.reshape(n * h, w), ang.reshape(n * h, w), h, cell, soft, x0, x1, wx0, wx1, *_pool_plan(cell),
+        ws.row_acc, ws.hx, ws.ob0_row, ws.ob1_row, ws.m0_row, ws.m1_row, ws.hist,
+    )
+    return ws.hist.reshape(n, h // cell, w // cell, N_BINS)
+
+
 def orientation_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.ndarray:
     """`cell_histograms` channel first, (18, N, hc, wc) (a view)."""
     return np.moveaxis(cell_histograms(patches, cell, soft), -1, 0)
@@ -211,13 +288,48 @@ def _norm_buffers(n: int, hc: int, wc: int) -> tuple[np.ndarray, np.ndarray]:
     return tuple(np.empty((3 * N_ORIENT, n, hc, wc), dtype=np.float32) for _ in range(2))
 
 
-def fhog(patches: np.ndarray, cell: int = 4, soft: bool = False) -> np.ndarray:
+def fhog(
+    patches: np.ndarray, cell: int = 4, soft: bool = False, window: np.ndarray | None = None
+) -> np.ndarray:
     """FHOG features of N patches (N, H, W) float32 -> (N, 31, H//cell, W//cell) float32.
 
     Channels: 18 contrast-sensitive, 9 contrast-insensitive orientation channels, each the average of
     its 4 block-normalised and 0.2-truncated values, then 4 texture (gradient energy) channels, one per
     normalisation block (Felzenszwalb et al., TPAMI 2010, Sec. 6; the variant used by KCF).
+    `window`: optional (H//cell, W//cell) float32 map every channel is multiplied by (the cosine window;
+    the same numbers as multiplying the result).
     """
+    if patches.ndim == 2:
+        patches = patches[None]
+    patches = np.ascontiguousarray(patches, dtype=np.float32)
+    jit = _jit()
+    if jit is not None:
+        hist = _jit_histograms(jit, patches, cell, soft)
+        n, hc, wc, _ = hist.shape
+        ws = _workspace(n, patches.shape[1], patches.shape[2], cell, True)
+        out = np.empty((n, N_CHANNELS, hc, wc), dtype=np.float32)
+        use_window = window is not None
+        win = np.ascontiguousarray(window, dtype=np.float32) if use_window else ws.inv  # any 2-D float32
+        if use_window and win.shape != (hc, wc):
+            raise ValueError(f"window of shape {win.shape} for a {hc}x{wc} cell grid")
+        jit.normalise_kernel(
+            hist, _norm_eps(cell), np.float32(CLIP), np.float32(TEXTURE_WEIGHT), win, use_window,
+            ws.energy, ws.inv, ws.both, ws.tsum, out,
+        )
+        return out
+    out = _fhog_numpy(patches, cell, soft)
+    if window is not None:
+        out *= window
+    return out
+
+
+def _norm_eps(cell: int) -> np.float32:
+    """The block normalisation's regulariser (float32, as the numpy path adds it)."""
+    return np.float32(1e-4 / (4.0 * cell**4 * 2.0))
+
+
+def _fhog_numpy(patches: np.ndarray, cell: int, soft: bool) -> np.ndarray:
+    """`fhog` on the numpy path (no window)."""
     hist = cell_histograms(patches, cell, soft)  # (n, hc, wc, 18)
     n, hc, wc, _ = hist.shape
     both, t = _norm_buffers(n, hc, wc)  # 18 sensitive + 9 insensitive orientation channels
@@ -230,7 +342,7 @@ def fhog(patches: np.ndarray, cell: int = 4, soft: bool = False) -> np.ndarray:
     e[:, :, 0], e[:, :, -1] = e[:, :, 1], e[:, :, -2]
     # sum of each 2x2 block of (padded) cells; block (i, j) covers padded cells i..i+1, j..j+1
     blocks = e[:, :-1, :-1] + e[:, 1:, :-1] + e[:, :-1, 1:] + e[:, 1:, 1:]  # (n, hc+1, wc+1)
-    inv = 1.0 / np.sqrt(blocks + np.float32(1e-4 / (4.0 * cell**4 * 2.0)))
+    inv = 1.0 / np.sqrt(blocks + _norm_eps(cell))
     out = np.empty((n, N_CHANNELS, hc, wc), dtype=np.float32)
     orient = np.moveaxis(out[:, : 3 * N_ORIENT], 1, 0)  # (27, n, hc, wc) view
     clip = np.float32(CLIP)

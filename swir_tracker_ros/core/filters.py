@@ -32,6 +32,7 @@ class KCFFilter(BaseFilter):
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
         self.filter.train(self.features(img, [win])[0], rate)
+        self.train_scale(img, box, rate)
 
     def failed(self, det: Detection) -> bool:
         return det.psr < self.fp.psr_threshold
@@ -98,6 +99,7 @@ class DCFCAFilter(BaseFilter):
         offs = context_offsets(box.w, box.h, self.fp.n_context)
         feats = self.features(img, [win, *(win.shifted(dx, dy) for dx, dy in offs)])
         self.filter.train(feats[0], feats[1:], rate)
+        self.train_scale(img, box, rate)
 
     def failed(self, det: Detection) -> bool:
         mean = self._apce_sum / self._apce_n if self._apce_n else 0.0

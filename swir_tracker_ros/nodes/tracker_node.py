@@ -27,6 +27,7 @@ from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
+from swir_tracker_ros.core import fhog
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
 from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
@@ -58,6 +59,7 @@ class TrackerNode(Node):
         self.tracker_params = bind_parameters(self, TrackerParams, prefix=TRACKER_PREFIX,
                                               on_change=self._on_tracker_params)
         self.tracker = Tracker(self.tracker_params)
+        fhog.warm_up()  # the compiled FHOG loops load now (~1 s), not on the first tracked frame
         self.stats = FrameStats()
         self.poses = HeadPoseHistory()
         self.camera_intr: Intrinsics | None = None
