@@ -105,7 +105,7 @@ def tracker_params(occlusion: bool, estimator: str | None = None):
     if estimator is not None:
         params.filter_params().scale_estimator = estimator
     if occlusion:
-        # a PSR threshold no response reaches forces the 3x3 grid (full re-detection) every frame
+        # a PSR threshold no response reaches forces re-detection (the default's lattice) every frame
         params.kcf.psr_threshold = 100.0
     return params
 
@@ -189,6 +189,7 @@ STAGES = (
     ("swir_tracker_ros.core.scale", "ScaleFilter.train", "dsst scale filter", False),
     ("swir_tracker_ros.core.base", "BaseFilter.detect", "scale search", True),
     ("swir_tracker_ros.core.base", "BaseFilter.detect_grid", "grid", True),
+    ("swir_tracker_ros.core.base", "BaseFilter.detect_lattice", "grid", True),
     ("swir_tracker_ros.core.base", "BaseFilter.train_memory", "model update", True),
     ("swir_tracker_ros.core.filters", "KCFFilter.train", "model update", True),
     ("swir_tracker_ros.core.filters", "DCFCAFilter.train", "model update", True),
@@ -494,7 +495,7 @@ def main() -> None:
 
     names = {
         "normal": "ours normal (5 scales)",
-        "occlusion": "ours occlusion (5 scales + grid)",
+        "occlusion": "ours occlusion (5 scales + re-detection lattice)",
         "dsst": "ours normal, dsst option (1 window)",
         "csrt": "OpenCV CSRT",
         "kcf": "OpenCV KCF default (CN+gray)",
