@@ -212,3 +212,28 @@ def test_set_overrides_tracker_parameters():
     assert _set_path(Outer(), ["kcf", "padding"], 2.5, "kcf.padding=2.5").kcf.padding == 2.5  # nested groups
     with pytest.raises(HarnessError):
         _set_path(Outer(), ["kcf", "window"], 2.5, "kcf.window=2.5")
+
+
+def test_opencv_failure_frames_keep_the_last_box(monkeypatch) -> None:
+    """bench_worker v3: a frame whose `update` returns ok False is scored with the last box the tracker gave
+    (as an application shows it, and as our tracker's box is scored in every state), not as no box."""
+    from swir_tracker_ros.harness import bench_worker
+
+    class Flaky:
+        def __init__(self) -> None:
+            self.k = 0
+
+        def init(self, img, rect) -> None:
+            self.rect = rect
+
+        def update(self, img):
+            self.k += 1
+            x, y, w, h = self.rect
+            return self.k % 3 != 0, (x + self.k, y, w, h)  # every third update fails (box then junk)
+
+    monkeypatch.setitem(bench_worker.FACTORIES, "FLAKY", Flaky)
+    out = bench_worker.run("synth:control_no_occlusion", "FLAKY", max_frames=8)
+    run = out["runs"][0]
+    assert run["ok"][3] is False and run["ok"][4] is True
+    assert run["pred"][3] == run["pred"][2]  # held, not None
+    assert all(p is not None for p in run["pred"])

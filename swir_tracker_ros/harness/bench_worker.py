@@ -29,7 +29,7 @@ FACTORIES = {
     "CSRT": lambda: cv2.TrackerCSRT_create(),
     "MOSSE": lambda: cv2.legacy.TrackerMOSSE_create(),
 }
-WORKER_VERSION = 2  # part of the peer-cache key: bump when a change here changes the boxes
+WORKER_VERSION = 3  # part of the peer-cache key: bump when a change here changes the boxes
 
 
 def to_bgr8(image: np.ndarray) -> np.ndarray:
@@ -84,7 +84,9 @@ def run(spec: str, name: str, max_frames: int | None, perturbations: list[str] |
             t0 = time.perf_counter()
             ok, box = trk.update(img)
             r["seconds"] += time.perf_counter() - t0
-            r["pred"].append([float(v) for v in box] if ok else None)
+            # a failed update (ok False) shows the last box the tracker gave, as an application would and as
+            # our tracker reports its box in every state; `ok` False is no tracking claim (false tracking)
+            r["pred"].append([float(v) for v in box] if ok else r["pred"][-1])
             r["ok"].append(bool(ok))
     if not trackers:
         raise HarnessError(f"{src.name}: no frame with ground truth; nothing to track")
