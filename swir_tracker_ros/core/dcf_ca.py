@@ -3,20 +3,20 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
 from swir_tracker_ros.core.kcf import gaussian_label_spectrum, irfft2, linear_correlation, rfft2
-from swir_tracker_ros.core.scale import SCALE_ESTIMATORS, DSSTParams
+from swir_tracker_ros.core.scale import ScaleOptions
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 
 
 @dataclass
-class DCFCAParams:
+class DCFCAParams(ScaleOptions):
     """DCF-CA pipeline of the dissertation: filter (reference code defaults, seed-003 §1.1), APCE tests."""
 
     padding: float = _f(2.0, "window = (1 + padding) x target (3x)", 0.5, 4.0)
@@ -42,15 +42,6 @@ class DCFCAParams:
     )
     apce_update_ratio: float = _f(
         0.583, "no model update when APCE <= ratio x mean (eq. 4.97)", 0.0, 2.0
-    )
-    scale_estimator: str = _f(
-        "search",
-        "size estimation: search (the filter on every scaled window) or dsst (Danelljan et al., BMVC "
-        "2014: translation on the middle window only, then a 1-D scale filter; core/scale.py)",
-        choices=SCALE_ESTIMATORS,
-    )
-    dsst: DSSTParams = field(
-        default_factory=DSSTParams, metadata={"doc": "DSST scale filter (core/scale.py)"}
     )
 
     def validate(self) -> None:

@@ -3,21 +3,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 import scipy.fft as sfft
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
-from swir_tracker_ros.core.scale import SCALE_ESTIMATORS, DSSTParams
+from swir_tracker_ros.core.scale import ScaleOptions
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 
 
 @dataclass
-class KCFParams:
+class KCFParams(ScaleOptions):
     """KCF pipeline of paper 000: filter (Henriques et al. 2015, HOG defaults), failure test and update gate.
 
     `KCFParams.gray()` gives the raw-pixel set of the MATLAB reference.
@@ -51,15 +51,6 @@ class KCFParams:
     )
     lmcf_peak_ratio: float = _f(0.7, "gate lmcf: beta1, peak >= beta1 x mean peak (LMCF)", 0.0, 2.0)
     lmcf_apce_ratio: float = _f(0.45, "gate lmcf: beta2, APCE >= beta2 x mean APCE (LMCF)", 0.0, 2.0)
-    scale_estimator: str = _f(
-        "search",
-        "size estimation: search (paper 000: the filter on every scaled window) or dsst (Danelljan et al., "
-        "BMVC 2014: translation on the middle window only, then a 1-D scale filter; core/scale.py)",
-        choices=SCALE_ESTIMATORS,
-    )
-    dsst: DSSTParams = field(
-        default_factory=DSSTParams, metadata={"doc": "DSST scale filter (core/scale.py)"}
-    )
 
     @classmethod
     def gray(cls) -> KCFParams:

@@ -30,7 +30,7 @@ steps (its code: nScales / sqrt(33) x 1/4, the same at S = 33), model area 512 p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import cv2
@@ -74,10 +74,27 @@ class DSSTParams:
     def validate(self) -> None:
         validate_params(self, "dsst.")
 
+
     def check(self) -> None:
         """n_scales must be odd (the label and the factors are centred on scale 1)."""
         if self.n_scales % 2 == 0:
             raise ParameterError(f"parameter dsst.n_scales = {self.n_scales} must be odd")
+
+
+@dataclass
+class ScaleOptions:
+    """Size estimation of a base filter: the fields every filter's Params shares (KCFParams, DCFCAParams
+    inherit them, so they are declared once)."""
+
+    scale_estimator: str = _f(
+        "search",
+        "size estimation: search (paper 000: the filter on every scaled window) or dsst (Danelljan et al., "
+        "BMVC 2014: translation on the middle window only, then a 1-D scale filter; core/scale.py)",
+        choices=SCALE_ESTIMATORS,
+    )
+    dsst: DSSTParams = field(
+        default_factory=DSSTParams, metadata={"doc": "DSST scale filter (core/scale.py)"}
+    )
 
 
 @lru_cache(maxsize=8)
