@@ -37,8 +37,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from swir_tracker_ros.scene import crowd  # noqa: E402
 from swir_tracker_ros.acquisition.detectors import MotionDetector, MotionParams  # noqa: E402
+from swir_tracker_ros.scene import crowd  # noqa: E402
 from swir_tracker_ros.types import Box  # noqa: E402
 
 TUD = REPO.parent / "shared" / "data" / "mot" / "tud_campus"
