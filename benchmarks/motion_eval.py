@@ -13,7 +13,8 @@ least 25 % visible (as benchmarks/mot_eval.py).
 
 Rows ("variants") switch the changes of issue 16 off one at a time, so each one's share shows on the real
 sequence and on the synthetic crowds alike: "former" is the detector before them (warm-up 5 frames, a
-fixed 9 px closing, no ghost test, column split only, of regions wider than 1.5 persons).
+fixed 9 px closing, no ghost test, column split only, of regions wider than 1.5 persons, no bands).
+"no bands" is the default of the previous round (no people searched behind the boxes of a region).
 
 --offline adds a row whose background is the median of *all* frames of the sequence, past and future: an
 upper bound for a better background model with this segmentation. It is not the runtime path (the node
@@ -48,8 +49,11 @@ VARIANTS = {
     "closing 9 px fixed": {"close_rel": 0.0},
     "closing 15 px fixed": {"close_rel": 0.0, "close_size": 15},
     "warm-up 5": {"warmup": 5},
+    "no bands (round 2 default)": {"band_min_h": 0.0},
+    "bands beside whole boxes": {"band_core": 1.0},
+    "bands without the feet test": {"band_same": 0.0},
     "former (issue 16 start)": {"warmup": 5, "close_rel": 0.0, "ghost_speed": 0.0, "head_prominence": 1e9,
-                                "split_factor": 1.5},
+                                "split_factor": 1.5, "band_min_h": 0.0},
 }
 MISS = ("warm-up", "hidden > 50 %", "merged", "split", "part", "too large", "offset", "not found")
 FALSE = ("merged group", "part of a person", "too large", "offset", "nobody")

@@ -63,16 +63,20 @@ def test_motion_detector_finds_most_pedestrians_on_tud_campus(shared_dir: Path) 
     # Static camera, people present from the first frame and walking in groups. The former running Gaussian
     # background found 4 % at 6 % precision, the temporal median with person-width splitting 47.9 % at
     # 51.8 %; with the ghost test, the head split, a 1-frame warm-up and the closing scaled with the people
-    # found it measures 54.3 % at 67.9 % (benchmarks/motion_eval.py; a quarter of the ground truth is more
-    # than half hidden behind nearer people, out of reach of one silhouette per region).
+    # found 54.3 % at 67.9 %; with the people partly behind a nearer one found in the columns left over
+    # (bands) it measures 63.8 % at 63.1 % (benchmarks/motion_eval.py; a fifth of the ground truth is more
+    # than half hidden behind nearer people, most of them with their head inside the nearer silhouette).
     seq = shared_dir / "data" / "mot" / "tud_campus"
     recall, precision = _tud_recall_precision(seq, MotionDetector())
-    assert recall > 0.52 and precision > 0.66, (recall, precision)
-    # Each change carries its share: without the head split groups stay one box or are cut at the wrong
-    # columns (51.5 % at 59.9 %), without the ghost test the places people left are reported (58.9 %).
+    assert recall > 0.62 and precision > 0.61, (recall, precision)  # issue 16: both >= 60 %
+    # Each change carries its share: without the bands 54.3 % at 67.9 %; without the head split (and so
+    # without bands) groups stay one box or are cut at the wrong columns (51.5 % at 59.9 %); without the
+    # ghost test the places people left are reported (54.5 % precision).
+    no_bands = _tud_recall_precision(seq, MotionDetector(MotionParams(band_min_h=0.0)))
     no_heads = _tud_recall_precision(seq, MotionDetector(MotionParams(head_prominence=1e9)))
     no_ghost = _tud_recall_precision(seq, MotionDetector(MotionParams(ghost_speed=0.0)))
-    assert no_heads[0] < recall - 0.01 and no_heads[1] < precision - 0.05, no_heads
+    assert no_bands[0] < recall - 0.08, no_bands
+    assert no_heads[0] < recall - 0.1 and no_heads[1] < precision, no_heads
     assert no_ghost[1] < precision - 0.03, no_ghost
 
 
@@ -107,6 +111,29 @@ def test_ghost_of_someone_who_stood_still_is_absorbed() -> None:
     assert stray[id(kept)] == 0
     assert stray[id(ghost)] >= 4  # without the test the ghost stays until the median forgets it
     assert found >= 12
+
+
+def test_person_partly_behind_a_nearer_one_is_found() -> None:
+    # A near walker (feet at row 360) and a farther one (feet at 340, 100 px tall) walk together, the far
+    # one's right third behind the near one and his head hidden: one foreground region, one head on its
+    # outline. The columns left of the near walker's box, whose pixels end above his feet, are the far one
+    # (`_bands`); without them the region is one box.
+    bg = _textured_background(2)
+    found = {True: 0, False: 0}
+    dets = {True: MotionDetector(), False: MotionDetector(MotionParams(band_min_h=0.0))}
+    for k in range(30):
+        img = bg.copy()
+        x = 100 + 12 * k
+        cv2.rectangle(img, (x - 25, 226), (x + 25, 360), 40.0, -1)
+        cv2.circle(img, (x, 213), 12, 40.0, -1)
+        cv2.rectangle(img, (x - 49, 240), (x - 13, 340), 60.0, -1)
+        near, far = Box(x - 25.0, 201.0, 50.0, 160.0), Box(x - 49.0, 240.0, 36.0, 100.0)
+        for bands, det in dets.items():
+            boxes = [d.box for d in det.detect(img.astype(np.uint8))]
+            if k >= 12:  # the median buffer has forgotten where they started
+                found[bands] += any(b.iou(far) > 0.5 for b in boxes) and any(b.iou(near) > 0.5 for b in boxes)
+    assert found[True] >= 15, found
+    assert found[False] == 0, found
 
 
 def _pan(img: np.ndarray, dx: float) -> np.ndarray:

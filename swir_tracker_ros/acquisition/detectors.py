@@ -52,6 +52,17 @@ class MotionParams:
     head_prominence: float = 0.05  # a head is a top of the region's upper outline standing out by this
     # fraction of the region's height above the outline between it and the next head
     head_spacing: float = 0.5  # two heads are at least this times a person's width (aspect * height) apart
+    band_factor: float = 1.0  # a region wider than this times a person's width (aspect * its height) that
+    # shows a head gets a box per head, aspect times its height wide, and its columns outside the central
+    # band_core of those boxes are searched for people partly behind them ("bands")
+    band_core: float = 0.8  # the central fraction of a head's box taken as that person's columns
+    band_min_w: float = 0.2  # a band is a run of free columns at least this times a person's width wide ...
+    band_min_h: float = 0.4  # ... whose pixels, each column's run down from its top, span at least this
+    # fraction of the region's height; 0 = no bands
+    band_feet: float = 0.1  # a band whose lowest pixel lies within this fraction of a neighbouring box's
+    # height of that box's bottom stands as near as that person (ground plane), so it must span band_same
+    # of that box's height to be someone else (otherwise it is their leg in stride, arm or bag)
+    band_same: float = 0.9
 
 
 def _extent(counts: np.ndarray, trim: float) -> tuple[int, int]:
@@ -64,8 +75,9 @@ def _extent(counts: np.ndarray, trim: float) -> tuple[int, int]:
 class MotionDetector:
     """Temporal-median background of a buffer of past frames, threshold, opening then closing, connected
     regions; regions without motion are ghosts; a region wider than a person is split at its heads (or, with
-    fewer than two heads, at the emptiest columns) into people, and each box is the trimmed extent of its
-    pixels.
+    fewer than two heads, at the emptiest columns) into people, each box the trimmed extent of its pixels
+    or, from a head, aspect times its height wide; people partly behind them come from the region's columns
+    left over (`_bands`).
 
     A median over frames spanning history * sample_every frames holds the scene without the people who walk
     through it (a pixel is background in most of them), so people present from the first frame do not
@@ -174,13 +186,21 @@ class MotionDetector:
 
     def _people(self, mask: np.ndarray) -> list[tuple[float, float, float, float, float]]:
         """Boxes (x, y, w, h, fill) in the region's frame: one per head when the region is wider than
-        split_factor people and shows at least two heads, else the emptiest-column split."""
+        split_factor people and shows at least two heads, plus the people partly behind them (`_bands`);
+        one per head plus those behind when a region wider than band_factor people has a band; else the
+        emptiest-column split."""
         p = self.params
         h, w = mask.shape
         if w > p.split_factor * p.aspect * h:
             heads = self._heads(mask)
             if len(heads) >= 2:
-                return heads
+                return heads + self._bands(mask, heads)
+        if p.band_min_h > 0 and w > p.band_factor * p.aspect * h:
+            heads = self._heads(mask)
+            if heads:
+                bands = self._bands(mask, heads)
+                if bands:
+                    return heads + bands
         cols = mask.sum(axis=0)
         parts = max(1, round(w / (p.aspect * h))) if w > p.split_factor * p.aspect * h else 1
         cuts = [0]
@@ -198,6 +218,57 @@ class MotionDetector:
             x0, x1 = _extent(sub.sum(axis=0), p.trim)
             y0, y1 = _extent(sub.sum(axis=1), p.trim_v)
             out.append((float(a0 + x0), float(y0), float(x1 - x0), float(y1 - y0), px / float(sub.size)))
+        return out
+
+    def _bands(self, mask: np.ndarray, boxes: list[tuple[float, float, float, float, float]]
+               ) -> list[tuple[float, float, float, float, float]]:
+        """People partly behind the boxes found ("bands"; ours): a run of the region's columns outside the
+        central band_core of every box, band_min_w person widths wide, whose pixels span band_min_h of the
+        region's height, is a person aspect times that span wide, reaching from the run's free edge behind
+        the neighbouring box (boxes overlap, as the ground truth's of people one behind the other do).
+
+        The span runs from the band's top to the lowest end of each column's run of pixels down from its
+        top: a farther person's feet lie higher in the image (ground plane), and the nearer person's feet
+        below them, separated by a gap, do not belong to it. A band whose feet are level with a
+        neighbouring box's stands as near as that person, so it is another person only if about as tall
+        (band_same); else it is that person's leg in stride, arm or bag. Splitting a foreground region that
+        holds several people by its silhouette follows W4 (Haritaoglu, Harwood, Davis, "W4: real-time
+        surveillance of people and their activities", IEEE PAMI 22(8), 2000); the band test is ours."""
+        p = self.params
+        if p.band_min_h <= 0:
+            return []
+        h, w = mask.shape
+        free = mask.any(axis=0)
+        for bx, _, bw, _, _ in boxes:
+            m = (1 - p.band_core) * bw / 2
+            free[max(0, int(bx + m)):min(w, int(np.ceil(bx + bw - m)))] = False
+        out = []
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], free.astype(np.int8), [0]])))
+        for a, b in zip(edges[::2], edges[1::2], strict=True):
+            if b - a < p.band_min_w * p.aspect * h:
+                continue
+            sub = mask[:, a:b]
+            tops = sub.argmax(axis=0)
+            t = int(tops.min())
+            # each column's run of pixels down from its top (below a gap: someone nearer, e.g. their feet)
+            ends = [c0 + int(np.argmin(np.append(sub[c0:, j], False))) for j, c0 in enumerate(tops)]
+            bt = max(ends)
+            if bt - t < p.band_min_h * h:
+                continue
+            near = [bb for bb in boxes if bb[0] <= b + 1 and bb[0] + bb[2] >= a - 1]  # the boxes it touches
+            if any(bt > by + bh - p.band_feet * bh and bt - t < p.band_same * bh for _, by, _, bh, _ in near):
+                continue  # feet level with a neighbour's (as near as it) but much shorter: its legs or arm
+            wb = p.aspect * (bt - t)
+            left, right = a > 0 and mask[:, a - 1].any(), b < w and mask[:, b].any()
+            if right and not left:
+                x0 = float(a)
+            elif left and not right:
+                x0 = float(b) - wb
+            else:
+                x0 = (a + b) / 2 - wb / 2
+            x0, x1 = max(0.0, x0), min(float(w), x0 + wb)
+            fill = float(mask[t:bt, int(x0):int(np.ceil(x1))].mean())
+            out.append((x0, float(t), x1 - x0, float(bt - t), fill))
         return out
 
     def _heads(self, mask: np.ndarray) -> list[tuple[float, float, float, float, float]]:
