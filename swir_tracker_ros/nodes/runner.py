@@ -110,6 +110,21 @@ def default_usage(name: str, factory: Callable) -> str:
                       "Parameters: `ros2 param describe` on the running node; see docs/."])
 
 
+@contextlib.contextmanager
+def signals_deferred():
+    """Hold SIGINT / SIGTERM back while the block runs (they are delivered when it ends).
+
+    For start-up work that runs Python code inside C callbacks (numba loading its compiled loops calls back
+    through ctypes): a KeyboardInterrupt raised there is swallowed by ctypes ("Exception ignored on calling
+    ctypes callback function") instead of stopping the node; deferred, it arrives in plain Python code."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 class _OneInterrupt:
     """Python's SIGINT handler while the node runs (rclpy's handler chains to it): the first SIGINT
     raises KeyboardInterrupt to leave `spin`, later ones are ignored so that they cannot interrupt the

@@ -33,7 +33,7 @@ from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
 from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
 from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
-from swir_tracker_ros.nodes.runner import run_node, user_arguments
+from swir_tracker_ros.nodes.runner import run_node, signals_deferred, user_arguments
 from swir_tracker_ros.nodes.tracker_node_params import (
     FORMAT_CHANGE_FRAMES,
     FrameStats,
@@ -59,7 +59,8 @@ class TrackerNode(Node):
         self.tracker_params = bind_parameters(self, TrackerParams, prefix=TRACKER_PREFIX,
                                               on_change=self._on_tracker_params)
         self.tracker = Tracker(self.tracker_params)
-        fhog.warm_up()  # the compiled FHOG loops load now (~1 s), not on the first tracked frame
+        with signals_deferred():  # a Ctrl-C inside numba's ctypes callbacks would be swallowed there
+            fhog.warm_up()  # the compiled FHOG loops load now (~1 s), not on the first tracked frame
         self.stats = FrameStats()
         self.poses = HeadPoseHistory()
         self.camera_intr: Intrinsics | None = None
