@@ -37,7 +37,11 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from swir_tracker_ros.acquisition.detectors import MotionDetector, MotionParams  # noqa: E402
+from swir_tracker_ros.acquisition.detectors import (  # noqa: E402
+    MotionDetector,
+    MotionParams,
+    greedy_matches,
+)
 from swir_tracker_ros.scene import crowd  # noqa: E402
 from swir_tracker_ros.types import Box  # noqa: E402
 
@@ -90,14 +94,7 @@ def _inside(a: Box, b: Box) -> float:
 
 def match(boxes: list[Box], gt: list[Box]) -> tuple[set[int], set[int]]:
     """Greedy one-to-one matching by IoU (>= 0.5): matched detection and ground-truth indices."""
-    pairs = sorted(((b.iou(g), i, j) for i, b in enumerate(boxes) for j, g in enumerate(gt)), reverse=True)
-    used_b: set[int] = set()
-    used_g: set[int] = set()
-    for iou, i, j in pairs:
-        if iou >= 0.5 and i not in used_b and j not in used_g:
-            used_b.add(i)
-            used_g.add(j)
-    return used_b, used_g
+    return greedy_matches(boxes, gt)
 
 
 def miss_cause(g: Box, gt: list[Box], boxes: list[Box], warm: bool) -> str:

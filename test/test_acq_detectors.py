@@ -14,6 +14,7 @@ from swir_tracker_ros.acquisition.detectors import (
     MotDetFile,
     MotionDetector,
     MotionParams,
+    greedy_matches,
 )
 from swir_tracker_ros.errors import AcquisitionError
 from swir_tracker_ros.scene import crowd
@@ -45,14 +46,7 @@ def _tud_recall_precision(seq: Path, det: MotionDetector) -> tuple[float, float]
         img = cv2.imread(str(seq / f"{f:06d}.png"), cv2.IMREAD_GRAYSCALE)
         gt = [Box(r[2] - 1.0, r[3] - 1.0, r[4], r[5]) for r in rows[rows[:, 0] == f]]
         boxes = [d.box for d in det.detect(img)]
-        pairs = sorted(((b.iou(g), i, j) for i, b in enumerate(boxes) for j, g in enumerate(gt)),
-                       reverse=True)
-        used_b: set[int] = set()
-        used_g: set[int] = set()
-        for iou, i, j in pairs:
-            if iou >= 0.5 and i not in used_b and j not in used_g:
-                used_b.add(i)
-                used_g.add(j)
+        used_b, _ = greedy_matches(boxes, gt)
         tp += len(used_b)
         n_det += len(boxes)
         n_gt += len(gt)

@@ -65,6 +65,20 @@ class MotionParams:
     band_same: float = 0.9
 
 
+def greedy_matches(boxes: list[Box], truth: list[Box], min_iou: float = 0.5) -> tuple[set[int], set[int]]:
+    """Greedy one-to-one matching of detections to ground truth by decreasing IoU (>= `min_iou`), the
+    per-frame rule of the detector's recall / precision (docs/acquisition.md): matched indices of `boxes`
+    and of `truth`."""
+    pairs = sorted(((b.iou(g), i, j) for i, b in enumerate(boxes) for j, g in enumerate(truth)), reverse=True)
+    used_b: set[int] = set()
+    used_g: set[int] = set()
+    for iou, i, j in pairs:
+        if iou >= min_iou and i not in used_b and j not in used_g:
+            used_b.add(i)
+            used_g.add(j)
+    return used_b, used_g
+
+
 def _extent(counts: np.ndarray, trim: float) -> tuple[int, int]:
     """[start, stop) holding the central 1 - 2 trim of the mass of a 1-D histogram."""
     c = np.cumsum(counts, dtype=np.float64)
