@@ -225,8 +225,9 @@ class Tracker:
                 kf.x[self._centre_rates] *= p.coast_velocity_decay
             mid = len(wins) // 2
             # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
+            rings = self._rings() if self._lattice else 0
             if self._lattice:
-                cand, grid = bank.detect_lattice(img, wins[mid], p.lattice_step, self._rings())
+                cand, grid = bank.detect_lattice(img, wins[mid], p.lattice_step, rings)
                 grid = [wins[mid], *grid]
             else:
                 cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)
@@ -237,7 +238,7 @@ class Tracker:
                         cand += bank.detect_grid(img, wins[i], p.grid_overlap, scale=f)[0]
             else:
                 cand = [dets[mid], *cand]
-            det = max(cand, key=self._redetection_score(pred, wins[mid]))
+            det = max(cand, key=self._redetection_score(pred, wins[mid], rings))
             shown = tuple(grid)
         size = (
             (pred.w * det.scale, pred.h * det.scale)
@@ -360,16 +361,16 @@ class Tracker:
             bank.train_memory(img, self._box, p.memory_rate)
         return True
 
-    def _redetection_score(self, pred: Box, window: Box) -> Callable[[Detection], float]:
+    def _redetection_score(self, pred: Box, window: Box, rings: int) -> Callable[[Detection], float]:
         """Ranking of the re-detection candidates: the peak, times a Gaussian motion prior (ours, measured).
 
-        The prior's sigma is `redetect_prior` x the lattice's half-width along each axis (rings x step x
+        The prior's sigma is `redetect_prior` x the lattice's half-width along each axis (`rings` x step x
         window), so it widens with the lattice; `redetect_prior` 0 (and the papers' variants): the peak.
         """
         p = self.params
         if not (self._lattice and p.redetect_prior > 0.0):
             return lambda d: d.peak
-        half = p.redetect_prior * self._rings() * p.lattice_step
+        half = p.redetect_prior * rings * p.lattice_step
         sx, sy = half * window.w, half * window.h
 
         def score(d: Detection) -> float:

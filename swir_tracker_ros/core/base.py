@@ -148,12 +148,34 @@ class BaseFilter(ABC):
         array of the result's shape written in place.
         """
         sx, sy, wins = self.grid_geometry(window, overlap)
+        offsets = [(k % 3 - 1, k // 3 - 1) for k in keep]
+        return self._union_maps(img, window, sx, sy, offsets, (-1, 1, -1, 1), "grid", out), wins
+
+    def _union_maps(
+        self,
+        img: np.ndarray,
+        window: Box,
+        sx: int,
+        sy: int,
+        offsets: Sequence[tuple[int, int]],
+        bounds: tuple[int, int, int, int],
+        name: str,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Windowed feature maps (len(offsets), C, rows, cols) of the windows `window` shifted by (i sx,
+        j sy) template cells for each (i, j) in `offsets`, cut from ONE feature computation on the union of
+        the windows with i in [bounds[0], bounds[1]] and j in [bounds[2], bounds[3]] (the windows sit on
+        whole cells of the union). `name` keys the reused union-patch buffer; `out`: optional float32 array
+        of the result's shape written in place."""
         c = self.cell
-        uw, uh = self.tw + 2 * sx * c, self.th + 2 * sy * c
+        ilo, ihi, jlo, jhi = bounds
+        uw, uh = self.tw + (ihi - ilo) * sx * c, self.th + (jhi - jlo) * sy * c
         kx, ky = window.w / self.tw, window.h / self.th
-        union = Box.from_center(window.cx, window.cy, uw * kx, uh * ky)
+        ucx = window.cx + 0.5 * (ilo + ihi) * sx * c * kx
+        ucy = window.cy + 0.5 * (jlo + jhi) * sy * c * ky
+        union = Box.from_center(ucx, ucy, uw * kx, uh * ky)
         if img.dtype == np.float32 and img.ndim == 2:  # the conditioned frame: warp into a reused array
-            patch = self._scratch("grid union patch", (1, uh, uw))
+            patch = self._scratch(f"{name} union patch", (1, uh, uw))
             sample_patch(img, union, uw, uh, out=patch[0])
         else:
             patch = sample_patch(img, union, uw, uh)[None]
@@ -161,11 +183,11 @@ class BaseFilter(ABC):
         fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
         win = cosine_window(fh, fw)
         if out is None:
-            out = np.empty((len(keep), feats.shape[0], fh, fw), dtype=np.float32)
-        for i, k in enumerate(keep):  # slices of the union map (steps are whole cells; gray: cell = 1 px)
-            r0, c0 = (k // 3) * sy, (k % 3) * sx
-            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[i])
-        return out, wins
+            out = np.empty((len(offsets), feats.shape[0], fh, fw), dtype=np.float32)
+        for n, (i, j) in enumerate(offsets):  # slices of the union map (steps are whole cells; gray: 1 px)
+            r0, c0 = (j - jlo) * sy, (i - ilo) * sx
+            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[n])
+        return out
 
     def detect_grid(
         self, img: np.ndarray, window: Box, overlap: float, scale: float = 1.0, skip_centre: bool = True
@@ -254,24 +276,12 @@ class BaseFilter(ABC):
         sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih))
         if not wins:
             return [], []
-        c = self.cell
         cols = [i for i, _ in offsets] + [0]
         rows = [j for _, j in offsets] + [0]
-        ilo, ihi, jlo, jhi = min(cols), max(cols), min(rows), max(rows)
-        uw = self.tw + (ihi - ilo) * sx * c
-        uh = self.th + (jhi - jlo) * sy * c
-        kx, ky = window.w / self.tw, window.h / self.th
-        ucx = window.cx + 0.5 * (ilo + ihi) * sx * c * kx
-        ucy = window.cy + 0.5 * (jlo + jhi) * sy * c * ky
-        union = Box.from_center(ucx, ucy, uw * kx, uh * ky)
-        feats = unwindowed_features(sample_patch(img, union, uw, uh)[None], self.kind, c)[0]
-        fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
-        cos = cosine_window(fh, fw)
-        out = np.empty((len(wins), feats.shape[0], fh, fw), dtype=np.float32)
-        for n, (i, j) in enumerate(offsets):
-            r0, c0 = (j - jlo) * sy, (i - ilo) * sx
-            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], cos, out=out[n])
-        responses = self.filter.respond(out)
+        bounds = (min(cols), max(cols), min(rows), max(rows))
+        buf = self._scratch("lattice features", (len(wins), *self.shape))  # consumed by `respond` below
+        feats = self._union_maps(img, window, sx, sy, offsets, bounds, "lattice", buf)
+        responses = self.filter.respond(feats)
         return self._detections(responses, wins, [scale] * len(wins)), wins
 
     def _detect_dsst(
