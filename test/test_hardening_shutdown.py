@@ -109,3 +109,25 @@ def test_a_signal_during_start_up_exits_0_quietly(processes: ProcessSet, exe: st
     time.sleep(0.8)
     rc = send(proc, SIGNALS["INT+INT 10 ms"])
     assert rc == 0 and clean(processes.log(proc)), (rc, processes.log(proc))
+
+
+def test_a_sigint_inside_signals_deferred_takes_effect_when_the_block_ends() -> None:
+    """The tracker loads its compiled FHOG loops inside `signals_deferred()`: a Ctrl-C there must neither
+    be raised inside numba's ctypes callbacks (where ctypes swallows it) nor be lost. Python runs the
+    SIGINT handler in the main thread wherever it is, whichever thread the kernel gave the signal to (the
+    node has DDS threads), so masking the signal is no help; the handler is called here as Python would
+    call it in the middle of the block."""
+    from swir_tracker_ros.nodes.runner import _OneInterrupt, signals_deferred
+
+    previous = signal.getsignal(signal.SIGINT)
+    handler = _OneInterrupt()
+    signal.signal(signal.SIGINT, handler)
+    inside_done = False
+    try:
+        with pytest.raises(KeyboardInterrupt), signals_deferred():
+            handler(signal.SIGINT, None)
+            inside_done = True
+        assert inside_done
+        handler(signal.SIGINT, None)  # the first one counted: later ones are ignored as before
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -110,33 +110,52 @@ def default_usage(name: str, factory: Callable) -> str:
                       "Parameters: `ros2 param describe` on the running node; see docs/."])
 
 
-@contextlib.contextmanager
-def signals_deferred():
-    """Hold SIGINT / SIGTERM back while the block runs (they are delivered when it ends).
-
-    For start-up work that runs Python code inside C callbacks (numba loading its compiled loops calls back
-    through ctypes): a KeyboardInterrupt raised there is swallowed by ctypes ("Exception ignored on calling
-    ctypes callback function") instead of stopping the node; deferred, it arrives in plain Python code."""
-    held = {signal.SIGINT, signal.SIGTERM}
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
 class _OneInterrupt:
     """Python's SIGINT handler while the node runs (rclpy's handler chains to it): the first SIGINT
     raises KeyboardInterrupt to leave `spin`, later ones are ignored so that they cannot interrupt the
-    shutdown that the first one started."""
+    shutdown that the first one started. Inside `held_back()` a SIGINT is only noted, and raised when the
+    block ends."""
 
     def __init__(self) -> None:
         self.seen = False
+        self.held = 0
+        self.pending = False
 
     def __call__(self, _signum: int, _frame: object) -> None:
+        if self.held:
+            self.pending = True
+            return
         if not self.seen:
             self.seen = True
             raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def held_back(self):
+        self.held += 1
+        try:
+            yield
+        finally:
+            self.held -= 1
+        if not self.held and self.pending:
+            self.pending = False
+            self(signal.SIGINT, None)
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """Hold a SIGINT back while the block runs; it takes effect when the block ends.
+
+    For start-up work that runs Python code inside C callbacks (numba loading its compiled loops calls back
+    through ctypes): a KeyboardInterrupt raised there is swallowed by ctypes ("Exception ignored on calling
+    ctypes callback function") instead of stopping the node. Masking the signal would not do: the DDS
+    threads still receive it and Python runs the handler in the main thread wherever it is. SIGTERM needs
+    nothing: rclpy's handler shuts the context down without raising."""
+    handler = signal.getsignal(signal.SIGINT)
+    if isinstance(handler, _OneInterrupt):
+        with handler.held_back():
+            yield
+    else:
+        yield
 
 
 def _ignore_signals() -> None:
