@@ -9,11 +9,13 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from swir_tracker_ros.core.fhog import fhog
+from swir_tracker_ros.core.channels import intensity_channels
+from swir_tracker_ros.core.fhog import N_CHANNELS, fhog
 from swir_tracker_ros.types import Box
 
 HOG_KINDS = ("hog", "hog_soft")  # FHOG with hard or soft orientation bins
-FEATURE_KINDS = (*HOG_KINDS, "gray")
+INTENSITY_BINS = {"hog_gray": 0, "hog_ih": 8}  # soft FHOG + intensity (+ histogram bins): core/channels.py
+FEATURE_KINDS = (*HOG_KINDS, *INTENSITY_BINS, "gray")
 
 
 _BLUR_ALIGN = 32  # columns: a multiple of the widest SIMD float vector x 2 (AVX-512: 16 lanes)
@@ -86,7 +88,9 @@ def cosine_window(rows: int, cols: int) -> np.ndarray:
 def feature_shape(kind: str, patch_h: int, patch_w: int, cell: int) -> tuple[int, int, int]:
     """(channels, rows, cols) of the feature map of a patch."""
     if kind in HOG_KINDS:
-        return (31, patch_h // cell, patch_w // cell)
+        return (N_CHANNELS, patch_h // cell, patch_w // cell)
+    if kind in INTENSITY_BINS:
+        return (N_CHANNELS + 1 + INTENSITY_BINS[kind], patch_h // cell, patch_w // cell)
     return (1, patch_h, patch_w)
 
 
@@ -94,10 +98,14 @@ def unwindowed_features(patches: np.ndarray, kind: str, cell: int) -> np.ndarray
     """Feature maps (N, C, rows, cols) of patches (N, H, W) in [0, 1], before the cosine window.
 
     `hog`: 31-channel FHOG with `cell`-pixel cells, hard orientation bins; `hog_soft`: the same with
-    soft orientation bins; `gray`: the intensity minus 0.5 (KCF raw pixels).
+    soft orientation bins; `hog_gray`: soft FHOG plus the cell-mean intensity; `hog_ih`: that plus an
+    8-bin intensity histogram per cell (core/channels.py); `gray`: the intensity minus 0.5 (KCF raw pixels).
     """
     if kind in HOG_KINDS:
         return fhog(patches, cell, soft=kind == "hog_soft")
+    if kind in INTENSITY_BINS:
+        extra = intensity_channels(patches, cell, INTENSITY_BINS[kind])
+        return np.concatenate([fhog(patches, cell, soft=True), extra], axis=1)
     if kind == "gray":
         return (patches - np.float32(0.5))[:, None, :, :]
     raise ValueError(f"unknown feature kind {kind!r}; expected one of {FEATURE_KINDS}")
