@@ -211,7 +211,8 @@ class Tracker:
         factors = p.scale_factors()
         wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
         dets = bank.detect(img, wins, factors)
-        best = max(range(len(dets)), key=lambda i: dets[i].peak)
+        mid = len(dets) // 2
+        best = max(range(len(dets)), key=lambda i: dets[i].peak * p.scale_penalty ** abs(i - mid))
         det = dets[best]
         failed = self._failure(det)
         mode = SearchMode.NORMAL
@@ -223,7 +224,8 @@ class Tracker:
             kf.x[self._size_rates] = 0.0
             if p.variant == "measured":
                 kf.x[self._centre_rates] *= p.coast_velocity_decay
-            mid = len(wins) // 2
+                if 0 < p.coast_frames <= self._occluded:
+                    kf.x[self._centre_rates] = 0.0
             # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
             rings = self._rings() if self._lattice else 0
             if self._lattice:

@@ -49,6 +49,15 @@ class TrackerParams:
     )
     scale_step: float = _f(0.05, "relative size step of the scale samples (paper 000: 5 %)", 0.0, 0.3)
     n_scales: int = _f(5, "scale samples around the predicted size (1, 3 or 5)", 1, 5)
+    scale_penalty: float = _f(
+        1.0,
+        "(ours) the peak of a scale sample k steps from the predicted size is weighted by this^|k| when the "
+        "best scale is picked (the scale_weight 0.95 of the KCF C++ reference implementation, KCFcpp): a "
+        "larger window that takes in more of the target's surroundings must beat the predicted size by "
+        "more than its peak noise; 1: the paper's largest peak",
+        0.5,
+        1.0,
+    )
     large_target_halving: float = _f(
         100.0,
         "model works at half resolution when sqrt(w h) >= this many pixels (KCF reference); 0 disables",
@@ -121,6 +130,14 @@ class TrackerParams:
         "the target was last seen while the lattice widens around it",
         0.0,
         1.0,
+    )
+    coast_frames: int = _f(
+        0,
+        "(ours, variant measured) frames of re-detection after which the centre velocity is set to zero: "
+        "the pre-occlusion motion carries the prediction through a short occlusion, a longer one is "
+        "searched around where the prediction stands (the lattice keeps widening); 0: never",
+        0,
+        100000,
     )
     memory_ratio: float = _f(
         0.5,
