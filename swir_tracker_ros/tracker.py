@@ -215,6 +215,10 @@ class Tracker:
         best = max(range(len(dets)), key=lambda i: dets[i].peak * p.scale_penalty ** abs(i - mid))
         det = dets[best]
         failed = self._failure(det)
+        # (ours) while re-detecting, a weak peak at the prediction is not the target coming back: keep
+        # searching the lattice rather than letting the background next to the occluder steer the filter
+        rescan = not failed and self._occluded > 0 and self._weak(det.peak)
+        failed = failed or rescan
         mode = SearchMode.NORMAL
         shown: tuple[Box, ...] = (wins[len(wins) // 2],)
         if failed:
