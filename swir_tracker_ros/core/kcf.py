@@ -10,6 +10,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
+from swir_tracker_ros.core.fhog import corr_jit
 from swir_tracker_ros.core.scale import ScaleOptions
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
@@ -89,7 +90,13 @@ def gaussian_correlation(
     spectrum with squared norm xx. Returns (N, rows, cols//2+1).
     """
     numel = zf.shape[1] * shape[0] * shape[1]
-    xy = irfft2(np.einsum("nchw,chw->nhw", zf, np.conj(xf)), shape)
+    cj = corr_jit()
+    if cj is not None and zf.dtype == xf.dtype == np.complex64:  # the same sums, compiled (core/corr_jit.py)
+        cross = np.empty((zf.shape[0], *zf.shape[2:]), dtype=np.complex64)
+        cj.cross_spectrum_kernel(np.ascontiguousarray(zf), np.ascontiguousarray(xf), cross)
+    else:
+        cross = np.einsum("nchw,chw->nhw", zf, np.conj(xf))
+    xy = irfft2(cross, shape)
     d = np.maximum(0.0, (zz[:, None, None] + xx - 2.0 * xy) / numel)
     return rfft2(np.exp(-d / sigma**2))
 
