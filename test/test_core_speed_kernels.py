@@ -139,3 +139,16 @@ def test_tracker_results_equal_on_the_numpy_path(recorded: dict, monkeypatch: py
     """Whole tracker, lattice included: the compiled loops (FHOG and correlation) against numpy only."""
     monkeypatch.setattr(fhog, "USE_JIT", False)
     assert _run(recorded["frames"], recorded["box"]) == recorded["results"]
+
+
+def test_subpixel_offset_equals_the_np_clip_version() -> None:
+    """The clamp without np.clip (its per-call overhead was most of the batched analysis) is np.clip's."""
+    rng = np.random.default_rng(3)
+    triples = [tuple(v) for v in rng.standard_normal((2000, 3)) * rng.choice([1e-6, 1.0, 1e3], (2000, 1))]
+    triples += [(0.0, 1.0, 0.0), (1.0, 1.0, 1.0), (-0.0, 0.0, -0.0), (np.inf, 1.0, 0.0), (np.nan, 1.0, 0.0)]
+    triples += [(0.0, 0.5, 1.0), (1.0, 0.5, 0.0), (-1e300, 1e300, 1e300)]
+    for left, centre, right in triples:
+        denom = 2.0 * centre - left - right
+        want = 0.0 if denom <= 1e-12 else float(np.clip(0.5 * (right - left) / denom, -0.5, 0.5))
+        got = confidence.subpixel_offset(left, centre, right)
+        assert (got == want and np.signbit(got) == np.signbit(want)) or (np.isnan(got) and np.isnan(want))

@@ -24,7 +24,8 @@ def subpixel_offset(left: float, centre: float, right: float) -> float:
     denom = 2.0 * centre - left - right
     if denom <= 1e-12:
         return 0.0
-    return float(np.clip(0.5 * (right - left) / denom, -0.5, 0.5))
+    v = float(0.5 * (right - left) / denom)
+    return -0.5 if v < -0.5 else 0.5 if v > 0.5 else v  # np.clip's result (NaN stays NaN), less overhead
 
 
 def psr(response: np.ndarray, row: int, col: int, exclusion: int = 10) -> float:

@@ -63,3 +63,20 @@ def cut_windows_kernel(
                 src = feats[c, r0[n] + y]
                 for x in range(cols):
                     out[n, c, y, x] = src[c0[n] + x] * win[y, x]
+
+
+@njit(cache=True, nogil=True)
+def stretch_kernel(src: np.ndarray, lo: np.float32, scale: np.float32, out: np.ndarray) -> None:
+    """out = clip((float32(src) - lo) * scale, 0, 1): `FrameConditioner`'s percentile stretch of an 8/16-bit
+    frame (conversion, subtraction, multiplication and clip, each a float32 operation as in numpy's
+    passes: a NaN would stay NaN as in np.clip) in one pass instead of four."""
+    rows, cols = src.shape
+    zero, one = np.float32(0.0), np.float32(1.0)
+    for y in range(rows):
+        for x in range(cols):
+            v = (np.float32(src[y, x]) - lo) * scale
+            if v < zero:
+                v = zero
+            elif v > one:
+                v = one
+            out[y, x] = v

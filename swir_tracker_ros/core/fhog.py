@@ -142,6 +142,8 @@ def warm_up() -> bool:
         cj.cross_spectrum_kernel(spec, spec[0], np.empty((1, 2, 2), np.complex64))
         one, win = np.zeros(1, dtype=np.intp), np.ones((2, 2), np.float32)
         cj.cut_windows_kernel(win[None], win, one, one, np.empty((1, 1, 2, 2), np.float32))
+        for dtype in (np.uint8, np.uint16):  # the frame types the conditioner stretches
+            cj.stretch_kernel(np.zeros((2, 2), dtype), np.float32(0.0), np.float32(1.0), win)
     return True
 
 
