@@ -152,3 +152,16 @@ def test_subpixel_offset_equals_the_np_clip_version() -> None:
         want = 0.0 if denom <= 1e-12 else float(np.clip(0.5 * (right - left) / denom, -0.5, 0.5))
         got = confidence.subpixel_offset(left, centre, right)
         assert (got == want and np.signbit(got) == np.signbit(want)) or (np.isnan(got) and np.isnan(want))
+
+
+def test_gaussian_correlation_equals_the_einsum_path(recorded: dict, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`gaussian_correlation` (training: the sample against itself) with the compiled channel sum."""
+    for xf, z, _ in recorded["respond"][::9]:
+        zf = kcf.rfft2(z)
+        zz = np.einsum("nchw,nchw->n", z, z)
+        args = (zf, zz, xf, float(zz[0]), 0.5, z.shape[-2:])
+        fast = kcf.gaussian_correlation(*args)
+        monkeypatch.setattr(fhog, "USE_JIT", False)
+        slow = kcf.gaussian_correlation(*args)
+        monkeypatch.setattr(fhog, "USE_JIT", True)
+        np.testing.assert_array_equal(fast, slow)
