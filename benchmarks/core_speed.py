@@ -97,6 +97,14 @@ def summarise(times: list[float], cpu: float) -> dict:
 
 
 # ---------------------------------------------------------------------------------------------- ours
+def warm_up() -> None:
+    """Load (on a fresh install: compile) every compiled loop before timing, as the tracker node does at
+    start-up; otherwise the first re-detection lattice pays numba's compile inside the timed frames."""
+    from swir_tracker_ros.core import fhog
+
+    fhog.warm_up()
+
+
 def tracker_params(occlusion: bool, estimator: str | None = None):
     """Default TrackerParams; `estimator` overrides the default filter's scale_estimator (e.g. "dsst")."""
     from swir_tracker_ros.tracker import TrackerParams
@@ -117,6 +125,7 @@ def time_ours(
     from swir_tracker_ros.tracker import Tracker
     from swir_tracker_ros.types import Box, SearchMode
 
+    warm_up()
     trk = Tracker(tracker_params(occlusion, estimator))
     trk.init(frames[0], Box(*box))
     want = SearchMode.MULTI_WINDOW if occlusion else SearchMode.NORMAL
@@ -184,6 +193,7 @@ STAGES = (
     ("swir_tracker_ros.core.kcf", "KCF.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.dcf_ca", "DCFCA.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.confidence", "analyse", "peak/PSR analysis", False),
+    ("swir_tracker_ros.core.confidence", "analyse_batch", "peak/PSR analysis", False),
     ("swir_tracker_ros.core.scale", "scale_patches", "sampling", False),
     ("swir_tracker_ros.core.scale", "ScaleFilter.response", "dsst scale filter", False),
     ("swir_tracker_ros.core.scale", "ScaleFilter.train", "dsst scale filter", False),
@@ -248,6 +258,7 @@ def profile_ours(
     from swir_tracker_ros.tracker import Tracker
     from swir_tracker_ros.types import Box
 
+    warm_up()
     timer = StageTimer()
     restore = install_stage_timers(timer)
     try:

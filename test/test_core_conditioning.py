@@ -93,3 +93,43 @@ def test_tracker_params_are_documented_and_validated() -> None:
             TrackerParams(**bad).validate()
     with pytest.raises(ParameterError, match=r"kcf\.psr_threshold"):
         TrackerParams(kcf=KCFParams(psr_threshold=-1.0)).validate()
+
+
+def test_percentiles_equal_np_percentile() -> None:
+    """The conditioner's own percentile (issue 17: less per-call overhead) gives np.percentile's numbers."""
+    from swir_tracker_ros.core.conditioning import _percentiles
+
+    rng = np.random.default_rng(5)
+    for k in range(2000):
+        n = int(rng.integers(1, 15000))
+        sample = (rng.random(n) * rng.choice([1.0, 255.0, 65535.0])).astype(np.float32)
+        if k % 3 == 0:
+            sample = np.round(sample)  # ties, as in integer frames
+        low, high = (0.5, 99.5) if k % 4 == 0 else (5.0 * rng.random(), 95.0 + 5.0 * rng.random())
+        want = tuple(float(v) for v in np.percentile(sample, [low, high]))
+        assert _percentiles(sample, low, high) == want
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+@pytest.mark.parametrize("stretch", ["auto", "always", "off"])
+def test_fused_stretch_equals_the_numpy_passes(
+    sequences_dir, dtype: type, stretch: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The compiled one-pass stretch (core/corr_jit.py) gives the numpy passes' frames bit for bit, on real
+    frames (8 bit, and widened to 16 bit as a SWIR camera would give them) over several frames (EMA)."""
+    import cv2
+
+    from swir_tracker_ros.core import fhog
+
+    pngs = sorted((sequences_dir / "ptbtir_airplane").glob("*.png"))[:6]
+    frames = [cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in pngs]
+    if dtype == np.uint16:
+        frames = [(f.astype(np.uint16) * 37 + 20000).astype(np.uint16) for f in frames]
+    outs = {}
+    for jit in (True, False):
+        monkeypatch.setattr(fhog, "USE_JIT", jit)
+        cond = FrameConditioner(ConditioningConfig(stretch=stretch))
+        outs[jit] = [cond(f) for f in frames]
+    for a, b in zip(outs[True], outs[False]):
+        assert a.dtype == b.dtype == np.float32
+        np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))  # every bit, sign of zero too

@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from swir_tracker_ros.core.confidence import analyse
+from swir_tracker_ros.core.confidence import analyse_batch
 from swir_tracker_ros.core.features import (
     cosine_window,
     extract_features,
@@ -27,6 +27,7 @@ from swir_tracker_ros.core.features import (
     sample_patches,
     unwindowed_features,
 )
+from swir_tracker_ros.core.fhog import corr_jit
 from swir_tracker_ros.core.params import TrackerParams
 from swir_tracker_ros.core.scale import ScaleFilter
 from swir_tracker_ros.core.windows import template_size
@@ -184,9 +185,15 @@ class BaseFilter(ABC):
         win = cosine_window(fh, fw)
         if out is None:
             out = np.empty((len(offsets), feats.shape[0], fh, fw), dtype=np.float32)
-        for n, (i, j) in enumerate(offsets):  # slices of the union map (steps are whole cells; gray: 1 px)
-            r0, c0 = (j - jlo) * sy, (i - ilo) * sx
-            np.multiply(feats[:, r0 : r0 + fh, c0 : c0 + fw], win, out=out[n])
+        # slices of the union map (steps are whole cells; gray: 1 px) times the window
+        r0 = np.array([(j - jlo) * sy for _, j in offsets], dtype=np.intp)
+        c0 = np.array([(i - ilo) * sx for i, _ in offsets], dtype=np.intp)
+        cj = corr_jit()
+        if cj is not None and feats.dtype == out.dtype == np.float32 and out.flags.c_contiguous:
+            cj.cut_windows_kernel(np.ascontiguousarray(feats), win, r0, c0, out)  # same products, one pass
+        else:
+            for n in range(len(offsets)):
+                np.multiply(feats[:, r0[n] : r0[n] + fh, c0[n] : c0[n] + fw], win, out=out[n])
         return out
 
     def detect_grid(
@@ -340,8 +347,8 @@ class BaseFilter(ABC):
         if self.gain != 1.0:
             responses = responses * self.gain
         out = []
-        for win, s, resp in zip(windows, scales, responses):  # one entry per window (<= 45), not per pixel
-            pk = analyse(resp, self.exclusion)
+        peaks = analyse_batch(responses, self.exclusion)  # all windows at once (the lattice has up to 48)
+        for win, s, pk in zip(windows, scales, peaks):
             cx = win.cx + pk.col * self.cell * (win.w / self.tw)
             cy = win.cy + pk.row * self.cell * (win.h / self.th)
             out.append(Detection(cx, cy, pk.value, pk.psr, pk.apce, s, win))

@@ -24,7 +24,8 @@ def subpixel_offset(left: float, centre: float, right: float) -> float:
     denom = 2.0 * centre - left - right
     if denom <= 1e-12:
         return 0.0
-    return float(np.clip(0.5 * (right - left) / denom, -0.5, 0.5))
+    v = float(0.5 * (right - left) / denom)
+    return -0.5 if v < -0.5 else 0.5 if v > 0.5 else v  # np.clip's result (NaN stays NaN), less overhead
 
 
 def psr(response: np.ndarray, row: int, col: int, exclusion: int = 10) -> float:
@@ -83,3 +84,63 @@ def analyse(response: np.ndarray, exclusion: int = 10) -> Peak:
     if col >= w / 2:
         col -= w
     return Peak(row=row, col=col, value=value, psr=psr(response, r, c, exclusion), apce=apce(response))
+
+
+def analyse_batch(responses: np.ndarray, exclusion: int = 10) -> list[Peak]:
+    """`analyse` of every response of a batch (N, rows, cols) at once: the same numbers, bit for bit.
+
+    The per-window reductions (sums, squared sums, extrema, the sidelobe region's sums) are numpy reductions
+    over each window's contiguous (rows, cols) block, which numpy carries out with the same pairwise
+    summation as `analyse` does on one window; the scalar arithmetic is the same Python float arithmetic.
+    One call costs ~15 numpy operations instead of ~40 per window (the re-detection lattice has up to 48).
+    """
+    resp = np.ascontiguousarray(responses)
+    n_win, h, w = resp.shape
+    if n_win == 0:
+        return []
+    flat = resp.reshape(n_win, h * w)
+    idx = flat.argmax(axis=1)
+    r_idx, c_idx = np.divmod(idx, w)
+    eh = min(exclusion, max(h - 2, 1))
+    ew = min(exclusion, max(w - 2, 1))
+    rows = (r_idx[:, None] + (np.arange(eh) - eh // 2)) % h
+    cols = (c_idx[:, None] + (np.arange(ew) - ew // 2)) % w
+    region = resp[np.arange(n_win)[:, None, None], rows[:, :, None], cols[:, None, :]]
+    sq = np.square(resp)
+    total = resp.sum(axis=(1, 2)).tolist()
+    total_sq = sq.sum(axis=(1, 2)).tolist()
+    reg = region.sum(axis=(1, 2)).tolist()
+    reg_sq = np.square(region).sum(axis=(1, 2)).tolist()
+    gmax = flat.max(axis=1)
+    gmin = flat.min(axis=1)
+    energy = np.mean(np.square(resp - gmin[:, None, None]), axis=(1, 2)).tolist()
+    gmax_l, gmin_l = gmax.tolist(), gmin.tolist()
+    # the three samples of the sub-pixel parabolas, wrapped
+    up = flat[np.arange(n_win), ((r_idx - 1) % h) * w + c_idx].tolist()
+    down = flat[np.arange(n_win), ((r_idx + 1) % h) * w + c_idx].tolist()
+    left = flat[np.arange(n_win), r_idx * w + (c_idx - 1) % w].tolist()
+    right = flat[np.arange(n_win), r_idx * w + (c_idx + 1) % w].tolist()
+    values = flat[np.arange(n_win), idx].tolist()
+    n_side = h * w - eh * ew
+    out = []
+    for k in range(n_win):
+        r, c, value = int(r_idx[k]), int(c_idx[k]), values[k]
+        dr = subpixel_offset(up[k], value, down[k]) if h > 2 else 0.0
+        dc = subpixel_offset(left[k], value, right[k]) if w > 2 else 0.0
+        row = r + dr
+        col = c + dc
+        if row >= h / 2:
+            row -= h
+        if col >= w / 2:
+            col -= w
+        if n_side < 2:
+            p = 0.0
+        else:
+            mean = (total[k] - reg[k]) / n_side
+            var = max((total_sq[k] - reg_sq[k]) / n_side - mean * mean, 0.0)
+            std = np.sqrt(var)
+            p = float((value - mean) / std) if std > 1e-12 else 0.0
+        e = energy[k]
+        a = (gmax_l[k] - gmin_l[k]) ** 2 / e if e > 1e-20 else 0.0
+        out.append(Peak(row=row, col=col, value=value, psr=p, apce=a))
+    return out

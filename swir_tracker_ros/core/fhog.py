@@ -115,12 +115,35 @@ def _jit() -> ModuleType | None:
     return _jit_module() if USE_JIT else None
 
 
+@lru_cache(maxsize=1)
+def _corr_jit_module() -> ModuleType | None:
+    """core/corr_jit.py (the correlation filters' compiled loops), or None when numba is not installed."""
+    try:
+        from swir_tracker_ros.core import corr_jit
+    except ImportError:
+        return None
+    return corr_jit
+
+
+def corr_jit() -> ModuleType | None:
+    """The compiled correlation loops (core/corr_jit.py) when in use (numba importable and `USE_JIT`)."""
+    return _corr_jit_module() if USE_JIT else None
+
+
 def warm_up() -> bool:
     """Import numba and load (on a fresh install: compile, ~4 s) the compiled loops now rather than on the
     first frame; ~1 s with numba's on-disk cache. For a node to call at start-up. True if they are in use."""
     if _jit() is None:
         return False
     fhog(np.zeros((1, 8, 8), dtype=np.float32), 4, soft=True, window=np.ones((2, 2), dtype=np.float32))
+    cj = corr_jit()
+    if cj is not None:
+        spec = np.zeros((1, 1, 2, 2), np.complex64)
+        cj.cross_spectrum_kernel(spec, spec[0], np.empty((1, 2, 2), np.complex64))
+        one, win = np.zeros(1, dtype=np.intp), np.ones((2, 2), np.float32)
+        cj.cut_windows_kernel(win[None], win, one, one, np.empty((1, 1, 2, 2), np.float32))
+        for dtype in (np.uint8, np.uint16):  # the frame types the conditioner stretches
+            cj.stretch_kernel(np.zeros((2, 2), dtype), np.float32(0.0), np.float32(1.0), win)
     return True
 
 

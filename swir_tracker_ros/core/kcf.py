@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -10,6 +11,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
+from swir_tracker_ros.core.fhog import corr_jit
 from swir_tracker_ros.core.scale import ScaleOptions
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
@@ -89,9 +91,39 @@ def gaussian_correlation(
     spectrum with squared norm xx. Returns (N, rows, cols//2+1).
     """
     numel = zf.shape[1] * shape[0] * shape[1]
-    xy = irfft2(np.einsum("nchw,chw->nhw", zf, np.conj(xf)), shape)
+    cj = corr_jit()
+    if cj is not None and zf.dtype == xf.dtype == np.complex64:  # the einsum's sums, compiled (corr_jit.py)
+        cross = np.empty((zf.shape[0], *zf.shape[2:]), dtype=np.complex64)
+        cj.cross_spectrum_kernel(np.ascontiguousarray(zf), np.ascontiguousarray(xf), cross)
+    else:
+        cross = np.einsum("nchw,chw->nhw", zf, np.conj(xf))
+    return _kernel_spectrum(cross, zz, xx, sigma, shape, numel)
+
+
+def _kernel_spectrum(
+    cross: np.ndarray, zz: np.ndarray, xx: float, sigma: float, shape: tuple[int, int], numel: int
+) -> np.ndarray:
+    """The rest of `gaussian_correlation` from the channel-summed cross-power spectrum (paper 000 eq. 7)."""
+    xy = irfft2(cross, shape)
     d = np.maximum(0.0, (zz[:, None, None] + xx - 2.0 * xy) / numel)
     return rfft2(np.exp(-d / sigma**2))
+
+
+_CHUNK_BYTES = 1 << 20  # spectra of this many bytes a chunk stay in a core's L2 cache (512 KB-1 MB)
+
+
+def _chunked_cross_spectrum(z: np.ndarray, xf: np.ndarray, cross_spectrum_kernel: Callable) -> np.ndarray:
+    """sum_c rfft2(z)[:, c] * conj(xf[c]) with the FFTs done a few windows at a time and each chunk's
+    spectra consumed by the compiled channel sum while they are still in cache (no 8 MB spectrum array
+    for a 41-window lattice). The same numbers as the einsum over the whole batch: each plane's FFT is
+    independent of the batch it is computed in, and the kernel sums the channels in the einsum's order."""
+    n, c, rows, cols = z.shape
+    k = cols // 2 + 1
+    cross = np.empty((n, rows, k), dtype=np.complex64)
+    step = max(1, _CHUNK_BYTES // (c * rows * k * 8))
+    for i in range(0, n, step):
+        cross_spectrum_kernel(rfft2(z[i : i + step]), xf, cross[i : i + step])
+    return cross
 
 
 def linear_correlation(zf: np.ndarray, xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -136,8 +168,16 @@ class KCF:
     def respond(self, z: np.ndarray) -> np.ndarray:
         if self.model_alphaf is None:
             raise TrackerError("KCF.respond called before train")
-        zf = rfft2(z)
         zz = np.einsum("nchw,nchw->n", z, z)
         xx = float(np.vdot(self.model_x, self.model_x))
-        kzf = gaussian_correlation(zf, zz, self.model_xf, xx, self.params.kernel_sigma, self.shape)
+        sigma = self.params.kernel_sigma
+        cj = corr_jit()
+        if cj is not None and z.dtype == np.float32 and self.model_xf.dtype == np.complex64:
+            # gaussian_correlation's numbers, its FFT and channel sum fused chunk by chunk (core/corr_jit.py)
+            xf = np.ascontiguousarray(self.model_xf)
+            cross = _chunked_cross_spectrum(np.ascontiguousarray(z), xf, cj.cross_spectrum_kernel)
+            numel = z.shape[1] * self.shape[0] * self.shape[1]
+            kzf = _kernel_spectrum(cross, zz, xx, sigma, self.shape, numel)
+        else:
+            kzf = gaussian_correlation(rfft2(z), zz, self.model_xf, xx, sigma, self.shape)
         return irfft2(self.model_alphaf[None] * kzf, self.shape)  # eq. 8

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -80,6 +81,14 @@ def coefficients(w: float, method: str, alpha_f: float | None) -> tuple[float, f
     raise KalmanError(f"unknown method {method!r}; choose one of {METHODS}")
 
 
+@lru_cache(maxsize=4)
+def _eye(n: int) -> np.ndarray:
+    """Read-only n x n identity, built once (np.eye's call overhead showed in the per-frame profile)."""
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
 def scalar_update(x: np.ndarray, P: np.ndarray, y: float, h: np.ndarray, r: float,
                   influence: Influence | None, method: str = "A2",
                   alpha_f: float | None = None) -> tuple[np.ndarray, np.ndarray, ScalarStep]:
@@ -111,7 +120,7 @@ def scalar_update(x: np.ndarray, P: np.ndarray, y: float, h: np.ndarray, r: floa
     K0 = g / s2
     x_new = x + K0 * (eps * c)
     # Joseph form for the Kalman gain K0: P = (I - K0 h) M (I - K0 h)' + K0 r K0'
-    IKH = np.eye(len(x)) - K0[:, None] * h[None, :]
+    IKH = _eye(len(x)) - K0[:, None] * h[None, :]
     J = IKH @ P @ IKH.T + (r * K0)[:, None] * K0[None, :]
     J = 0.5 * (J + J.T)
     P_new = J if alpha == 1.0 else (1.0 - alpha) * P + alpha * J

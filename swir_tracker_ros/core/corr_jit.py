@@ -1,0 +1,82 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Compiled (numba) loops of the correlation filters' hot path outside the FFTs (issue 17).
+
+Used by core/kcf.py (`gaussian_correlation`) and core/base.py (`_union_maps`) when numba is importable
+and `fhog.USE_JIT` is on (the same switch as the compiled FHOG); otherwise they keep their numpy code.
+Each loop performs, element by element, the same float32 operations in the same order as the numpy code
+it replaces, so responses and feature maps are bit-identical (test/test_core_speed_kernels.py):
+
+- no `fastmath` (no re-association, no fused multiply-add);
+- the channel sum of the cross-power spectrum accumulates channel after channel in complex64, with the
+  products written out as numpy's complex multiply by the conjugate (re = ar br - ai bi, im = ar bi + ai br
+  with b = conj(x), the same roundings as `np.einsum("nchw,chw->nhw", zf, np.conj(xf))`).
+
+Compiled on first use and cached on disk (`cache=True`), like core/fhog_jit.py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def cross_spectrum_kernel(zf: np.ndarray, xf: np.ndarray, out: np.ndarray) -> None:
+    """out[n] = sum over c of zf[n, c] * conj(xf[c]) (complex64), channels summed in order.
+
+    zf: (N, C, rows, k) complex64, xf: (C, rows, k) complex64, out: (N, rows, k) complex64. One row of
+    accumulators per (n, row) stays in cache while the channels stream past (paper 000 eq. 7: the sum of
+    the per-channel correlations in the Fourier domain).
+    """
+    n_win, n_ch, rows, k = zf.shape
+    acc_r = np.empty(k, dtype=np.float32)
+    acc_i = np.empty(k, dtype=np.float32)
+    for n in range(n_win):
+        for y in range(rows):
+            for x in range(k):
+                acc_r[x] = np.float32(0.0)
+                acc_i[x] = np.float32(0.0)
+            for c in range(n_ch):
+                for x in range(k):
+                    a = zf[n, c, y, x]
+                    b = xf[c, y, x]
+                    ar, ai, br, bi = a.real, a.imag, b.real, -b.imag
+                    acc_r[x] += ar * br - ai * bi
+                    acc_i[x] += ar * bi + ai * br
+            for x in range(k):
+                out[n, y, x] = complex(acc_r[x], acc_i[x])
+
+
+@njit(cache=True, nogil=True)
+def cut_windows_kernel(
+    feats: np.ndarray, win: np.ndarray, r0: np.ndarray, c0: np.ndarray, out: np.ndarray
+) -> None:
+    """out[n] = feats[:, r0[n] : r0[n] + rows, c0[n] : c0[n] + cols] * win (float32 products).
+
+    feats: (C, H, W) float32 union feature map, win: (rows, cols) float32 cosine window, out: (N, C, rows,
+    cols) float32: the window maps cut from one union map (`BaseFilter._union_maps`).
+    """
+    n_win, n_ch, rows, cols = out.shape
+    for n in range(n_win):
+        for c in range(n_ch):
+            for y in range(rows):
+                src = feats[c, r0[n] + y]
+                for x in range(cols):
+                    out[n, c, y, x] = src[c0[n] + x] * win[y, x]
+
+
+@njit(cache=True, nogil=True)
+def stretch_kernel(src: np.ndarray, lo: np.float32, scale: np.float32, out: np.ndarray) -> None:
+    """out = clip((float32(src) - lo) * scale, 0, 1): `FrameConditioner`'s percentile stretch of an 8/16-bit
+    frame (conversion, subtraction, multiplication and clip, each a float32 operation as in numpy's
+    passes: a NaN would stay NaN as in np.clip) in one pass instead of four."""
+    rows, cols = src.shape
+    zero, one = np.float32(0.0), np.float32(1.0)
+    for y in range(rows):
+        for x in range(cols):
+            v = (np.float32(src[y, x]) - lo) * scale
+            if v < zero:
+                v = zero
+            elif v > one:
+                v = one
+            out[y, x] = v
