@@ -217,7 +217,7 @@ class Tracker:
         failed = self._failure(det)
         # (ours) while re-detecting, a weak peak at the prediction is not the target coming back: keep
         # searching the lattice rather than letting the background next to the occluder steer the filter
-        rescan = not failed and self._occluded > 0 and self._weak(det.peak)
+        rescan = p.redetect_rescan and not failed and self._occluded > 0 and self._weak(det.peak)
         failed = failed or rescan
         mode = SearchMode.NORMAL
         shown: tuple[Box, ...] = (wins[len(wins) // 2],)

@@ -131,6 +131,12 @@ class TrackerParams:
         0.0,
         1.0,
     )
+    redetect_rescan: bool = _f(
+        False,
+        "(ours, variant measured) while re-detecting, a non-failed but weak peak at the prediction (below "
+        "redetect_peak_ratio x the tracked mean) keeps the lattice search going instead of steering the "
+        "filter as a normal-mode measurement",
+    )
     coast_frames: int = _f(
         0,
         "(ours, variant measured) frames of re-detection after which the centre velocity is set to zero: "
