@@ -212,7 +212,8 @@ class Tracker:
         wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
         dets = bank.detect(img, wins, factors)
         mid = len(dets) // 2
-        best = max(range(len(dets)), key=lambda i: dets[i].peak * p.scale_penalty ** abs(i - mid))
+        penalty = p.scale_penalty if p.variant == "measured" else 1.0
+        best = max(range(len(dets)), key=lambda i: dets[i].peak * penalty ** abs(i - mid))
         det = dets[best]
         failed = self._failure(det)
         # (ours) while re-detecting, a weak peak at the prediction is not the target coming back: keep

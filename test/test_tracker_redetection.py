@@ -49,15 +49,21 @@ def test_demo_pedestrian_is_reacquired_after_stopping_behind_the_wall(seed: int)
     leave it a third of a window off both centres, where the cosine window has faded it out; meanwhile
     weak peaks on the background (0.3 against the target's 0.7) pull the prediction away. The default
     (lattice + peak rule) is `tracking` on the pedestrian within 0.5 s of its reappearance; the papers'
-    re-detection stays `occluded` on these seeds (measured: never re-acquired before 12 s)."""
-    def reacquired(params: TrackerParams) -> list[int]:
+    re-detection stays `occluded` on these seeds. That comparison is made on the papers' FHOG features
+    (with the default's extra intensity channel the 3x3 grid alone re-acquires seed 2 at frame 272 and
+    seed 1 at frame 293): the lattice re-acquires within 0.5 s, the grid never before 12 s."""
+    def reacquired(params: TrackerParams, fhog_only: bool = False) -> list[int]:
+        if fhog_only:
+            params.kcf.feature = "hog_soft"
         run = demo_follow(seed, 175, 300, params)
         return [k for k, r, gt in run if k > 250 and r.state is TrackState.TRACKING
                 and abs(r.box.cx - gt.cx) < 0.3 * gt.w and abs(r.box.cy - gt.cy) < 0.3 * gt.h]
 
     got = reacquired(TrackerParams())
     assert got and got[0] <= 285, got[:3]
-    assert not reacquired(TrackerParams(**PAPERS_REDETECTION))
+    lattice = reacquired(TrackerParams(), fhog_only=True)
+    assert lattice and lattice[0] <= 285, lattice[:3]
+    assert not reacquired(TrackerParams(**PAPERS_REDETECTION), fhog_only=True)
 
 
 def test_lattice_finds_a_target_midway_between_grid_windows() -> None:

@@ -64,8 +64,8 @@ class BaseFilter(ABC):
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         fp = self.own_params(p)
         self.fp = fp
-        self.kind = fp.feature
-        self.cell = 1 if fp.feature == "gray" else fp.cell_size
+        self.kind = self.feature_kind(p)
+        self.cell = 1 if self.kind == "gray" else fp.cell_size
         self.gain = 1.0
         self.exclusion = max(1, math.ceil(p.psr_exclusion_px / self.cell))
         self.model_scale = (
@@ -79,9 +79,18 @@ class BaseFilter(ABC):
         self.filter = self._build()
         self.scale_filter: ScaleFilter | None = None  # DSST option (core/scale.py), else the scale search
         if getattr(fp, "scale_estimator", "search") == "dsst":
-            self.scale_filter = ScaleFilter(fp.dsst, w, h, soft=fp.feature != "hog")
+            self.scale_filter = ScaleFilter(fp.dsst, w, h, soft=self.kind != "hog")
         self._training_memory = False
         self._scratch_buffers: dict[str, np.ndarray] = {}
+
+    @classmethod
+    def feature_kind(cls, p: TrackerParams) -> str:
+        """The feature kind of this filter's Params; `auto`: FHOG plus the intensity channel (`hog_gray`,
+        core/channels.py) for the variant measured (ours), the papers' soft FHOG for their variants."""
+        kind = cls.own_params(p).feature
+        if kind == "auto":
+            return "hog_gray" if p.variant == "measured" else "hog_soft"
+        return kind
 
     @classmethod
     def own_params(cls, p: TrackerParams) -> Any:

@@ -50,11 +50,12 @@ class TrackerParams:
     scale_step: float = _f(0.05, "relative size step of the scale samples (paper 000: 5 %)", 0.0, 0.3)
     n_scales: int = _f(5, "scale samples around the predicted size (1, 3 or 5)", 1, 5)
     scale_penalty: float = _f(
-        1.0,
-        "(ours) the peak of a scale sample k steps from the predicted size is weighted by this^|k| when the "
+        0.95,
+        "(ours, variant measured) the peak of a scale sample k steps from the predicted size is weighted by "
+        "this^|k| when the "
         "best scale is picked (the scale_weight 0.95 of the KCF C++ reference implementation, KCFcpp): a "
         "larger window that takes in more of the target's surroundings must beat the predicted size by "
-        "more than its peak noise; 1: the paper's largest peak",
+        "more than its peak noise; 1 (and the papers' variants): the largest peak",
         0.5,
         1.0,
     )
