@@ -3,13 +3,17 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from swir_tracker_ros.core.bacf import BACF
 from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.dcf_ca import DCFCA, context_offsets
+from swir_tracker_ros.core.features import feature_shape
 from swir_tracker_ros.core.kcf import KCF
 from swir_tracker_ros.core.params import PIPELINES, TrackerParams
-from swir_tracker_ros.core.windows import search_window
+from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman import DISSERTATION_DCFCA, PAPER000_KCF, BoxModel, dcfca_box_model, kcf_box_model
 from swir_tracker_ros.types import Box
@@ -119,7 +123,47 @@ class DCFCAFilter(BaseFilter):
         return dcfca_box_model(w, h)
 
 
-FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter)}
+class BACFFilter(KCFFilter):
+    """Background-aware correlation filter (Kiani Galoogahi et al., ICCV 2017; core/bacf.py) in the KCF
+    pipeline's frame: PSR failure test, peak / LMCF update gate, eq. 38 threshold map, 7-state box model
+    (inherited from `KCFFilter`).
+
+    The window is (1 + padding) x the target (BACF: 5x), resampled so that its feature map has at most
+    `max_window_cells` cells (BACF's filter_max_area); the filter is the target's size in cells. Responses
+    are scaled so that the first-frame self-response peaks at `reference_peak` (~1, as KCF's).
+    """
+
+    name = "bacf"
+
+    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+        self._size = (w, h)
+        super().__init__(p, w, h)
+
+    def _build(self) -> BACF:
+        fp = self.fp
+        w, h = self._size
+        cells = (self.tw // self.cell) * (self.th // self.cell)
+        if cells > fp.max_window_cells:  # BACF filter_max_area: a coarser template, the same window
+            self.model_scale *= math.sqrt(fp.max_window_cells / cells)
+            self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale)
+            self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
+            self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+        support = (
+            max(1, math.floor(h * self.model_scale / self.cell)),
+            max(1, math.floor(w * self.model_scale / self.cell)),
+        )
+        return BACF(fp, self.shape, self.target_cells, support)
+
+    def initialise(self, img: np.ndarray, box: Box) -> None:
+        """First-frame training, then the response gain from the filter's own training sample."""
+        super().initialise(img, box)
+        if self.fp.reference_peak > 0:
+            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+            self_peak = float(self.filter.respond(self.features(img, [win])).max())
+            self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
+
+
+FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter)}
 """Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
 
 

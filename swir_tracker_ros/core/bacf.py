@@ -1,0 +1,183 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Background-aware correlation filter (BACF; Kiani Galoogahi, Fagg, Lucey, ICCV 2017) on real FFTs.
+
+A multi-channel LINEAR filter h of the target's size (D cells per channel) is trained over a window T
+cells large, several times the target (`BACFParams.padding`): every circular shift of the whole window
+is a training sample, and since h is cropped to the target support (the binary crop P), the shifts that
+put background under h are real negatives, not the periodic copies of the target that a window-sized
+KCF sees (the boundary effect). Paper eq. 2 (spatial):
+
+    E(h) = 1/2 sum_j || y(j) - sum_k h_k^T P x_k[Delta tau_j] ||^2 + lambda / 2 sum_k || h_k ||^2.
+
+With the DFT-domain auxiliary filter g^ = sqrt(T) (F P^T (x) I_K) h (eq. 4), the augmented Lagrangian
+(eq. 5) is minimised by ADMM (eq. 6-12), each subproblem in closed form:
+
+- g^ (eq. 9-10, per frequency t, a K x K rank-one system solved by Sherman-Morrison):
+  (x^(t) x^(t)^H + T mu I) g^(t) = x^(t) conj(y^(t)) - T zeta^(t) + T mu h^(t);
+- h (eq. 7-8): h = T / (lambda + mu T) P (mu g + zeta), g and zeta the inverse DFTs, i.e. the
+  unconstrained solution cropped to the target support;
+- zeta^ <- zeta^ + mu (g^ - h^) (eq. 11), mu <- min(beta mu, mu_max) (eq. 12).
+
+Conventions: unnormalised DFTs (`kcf.rfft2`), the response to a feature map z is
+F^-1(sum_k conj(g^_k) z^_k) (correlation; its peak at (0, 0) means no displacement), the online model
+is the sample spectrum x^ blended with the learning rate (the reference code), and ADMM restarts from
+g = h = zeta = 0, mu = mu0 on every training call. The half spectra of `rfft2` are enough: every step
+is per frequency or a real inverse/forward transform, so Hermitian symmetry is kept.
+
+Defaults are the paper's / its reference code's: search area 5x the target, at most 50^2 cells,
+lambda 0.01, learning rate 0.013, output sigma 1/16 of the target size, 2 ADMM iterations, mu0 1,
+beta 10, mu_max 1e4; 5 scales (here the pipeline's scale search, or the DSST option).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swir_tracker_ros.core.kcf import KCFParams, gaussian_label_spectrum, irfft2, rfft2
+from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.paramfield import param as _f
+from swir_tracker_ros.paramfield import validate_params
+
+
+@dataclass
+class BACFParams(KCFParams):
+    """BACF pipeline (ICCV 2017; reference code defaults): filter, window, ADMM. The failure test (PSR),
+    update gate (peak / LMCF) and feature settings are KCF's (inherited); `kernel_sigma` is not read
+    (BACF is a linear filter)."""
+
+    padding: float = _f(
+        4.0, "training / search window = (1 + padding) x target (BACF: search area scale 5)", 0.5, 8.0
+    )
+    lambda_: float = _f(0.01, "lambda of eq. 2, weight of ||h||^2 (BACF: 0.01)", 1e-8, 10.0)
+    interp_factor: float = _f(0.013, "learning rate of the sample model (BACF: 0.013)", 0.0, 1.0)
+    output_sigma_factor: float = _f(
+        1.0 / 16.0, "Gaussian label sigma = sqrt(w h) x factor / cell (BACF: 1/16)", 0.01, 1.0
+    )
+    max_window_cells: int = _f(
+        2500,
+        "the window is resampled so its feature map has at most this many cells (BACF filter_max_area "
+        "50^2); bounds the cost of a large window",
+        64,
+        100000,
+    )
+    admm_iterations: int = _f(2, "ADMM iterations per training call (BACF: 2)", 1, 100)
+    admm_mu: float = _f(1.0, "initial penalty mu of the augmented Lagrangian (eq. 5; BACF: 1)", 1e-6, 1e6)
+    admm_beta: float = _f(10.0, "penalty growth mu <- beta mu per iteration (eq. 12; BACF: 10)", 1.0, 1e3)
+    admm_mu_max: float = _f(1e4, "largest penalty mu (eq. 12; BACF: 1e4)", 1e-6, 1e9)
+    reference_peak: float = _f(
+        1.0,
+        "(ours) responses are scaled so the first-frame self-response peaks at this value, as KCF's "
+        "does (~1), so the PSR / peak thresholds and the Huber map of eq. 38 keep their meaning; 0: raw",
+        0.0,
+        10.0,
+    )
+
+    def validate(self) -> None:
+        validate_params(self, "bacf.")
+
+
+def support_mask(shape: tuple[int, int], support: tuple[int, int]) -> tuple[slice, slice]:
+    """Rows and columns of the filter support P: a `support` (rows, cols) block at the window centre.
+
+    The window is centred on the target, so the filter that correlates the target to the label's peak
+    at (0, 0) sits where the target sits in the window (correlation: r(tau) = sum_n h(n) x(n + tau)).
+    """
+    rows, cols = shape
+    sr = max(1, min(rows, support[0]))
+    sc = max(1, min(cols, support[1]))
+    r0, c0 = (rows - sr) // 2, (cols - sc) // 2
+    return slice(r0, r0 + sr), slice(c0, c0 + sc)
+
+
+class BACF:
+    """One BACF model over feature maps of fixed shape (C, rows, cols) with a filter of `support` cells.
+
+    `train(x, rate)` blends the sample model with `x` (rate 1: replace) and solves for the filter by
+    ADMM; `respond(z)` returns the responses of a batch (N, C, rows, cols) as (N, rows, cols).
+    """
+
+    def __init__(
+        self,
+        params: BACFParams,
+        feat_shape: tuple[int, int, int],
+        target_cells: float,
+        support: tuple[int, int],
+    ) -> None:
+        self.params = params
+        self.shape = (feat_shape[1], feat_shape[2])
+        sigma = max(target_cells * params.output_sigma_factor, 0.25)
+        self.yf = gaussian_label_spectrum(self.shape[0], self.shape[1], float(sigma))
+        self.rows, self.cols = support_mask(self.shape, support)
+        self.model_xf: np.ndarray | None = None
+        self.gf: np.ndarray | None = None  # detection filter: the g^ of the last ADMM iteration
+        self.hf: np.ndarray | None = None  # the constrained filter's spectrum (support-limited h)
+        self.h: np.ndarray | None = None  # the constrained filter, spatial (C, rows, cols), zero off P
+
+    @property
+    def trained(self) -> bool:
+        return self.gf is not None
+
+    def train(self, x: np.ndarray, rate: float, iterations: int | None = None) -> list[float]:
+        """Blend the sample model with x (C, rows, cols) at `rate` and run ADMM (eq. 6-12).
+
+        Returns the objective E(h) of eq. 2 after each iteration when `iterations` is given (tests;
+        costs one extra correlation per iteration), else an empty list.
+        """
+        p = self.params
+        xf = rfft2(x).astype(np.complex64)
+        if self.model_xf is None or rate >= 1.0:
+            self.model_xf = xf
+        elif rate > 0.0:
+            self.model_xf = (1.0 - rate) * self.model_xf + rate * xf
+        else:
+            return []
+        trace = iterations is not None
+        n_iter = iterations if iterations is not None else p.admm_iterations
+        mf = self.model_xf
+        T = float(self.shape[0] * self.shape[1])
+        yf = self.yf
+        sxx = np.einsum("khw,khw->hw", mf, np.conj(mf)).real.astype(np.float32)  # x^H x per frequency
+        xy = mf * np.conj(yf)  # x conj(y)
+        gf = np.zeros_like(mf)
+        hf = np.zeros_like(mf)
+        lf = np.zeros_like(mf)
+        h = np.zeros((mf.shape[0], *self.shape), dtype=np.float32)
+        mu = p.admm_mu
+        objective: list[float] = []
+        for _ in range(n_iter):
+            # g^-subproblem (eq. 10, Sherman-Morrison): c = x conj(y) - T zeta + T mu h; g = c / (T mu) -
+            # x (x^H c) / (T mu (T mu + x^H x))
+            tm = T * mu
+            c = xy - T * lf + tm * hf
+            xc = np.einsum("khw,khw->hw", np.conj(mf), c)
+            gf = (c - mf * (xc / (tm + sxx))[None]) / tm
+            # h-subproblem (eq. 8): unconstrained solution cropped to the support P
+            full = irfft2(mu * gf + lf, self.shape)
+            h.fill(0.0)
+            h[:, self.rows, self.cols] = (T / (p.lambda_ + tm)) * full[:, self.rows, self.cols]
+            hf = rfft2(h).astype(np.complex64)
+            lf = lf + mu * (gf - hf)  # eq. 11
+            mu = min(p.admm_beta * mu, p.admm_mu_max)  # eq. 12
+            if trace:
+                objective.append(self.objective(h))
+        self.gf, self.hf, self.h = gf.astype(np.complex64), hf, h
+        return objective
+
+    def objective(self, h: np.ndarray) -> float:
+        """E(h) of eq. 2 for the current sample model: 1/2 ||y - sum_k x_k (*) h_k||^2 + lambda/2 ||h||^2."""
+        if self.model_xf is None:
+            raise TrackerError("BACF.objective called before train")
+        hf = rfft2(h)
+        r = irfft2(np.einsum("khw,khw->hw", np.conj(hf), self.model_xf), self.shape)
+        y = irfft2(self.yf, self.shape)
+        reg = 0.5 * self.params.lambda_ * np.sum(h.astype(np.float64) ** 2)
+        return float(0.5 * np.sum((y - r) ** 2) + reg)
+
+    def respond(self, z: np.ndarray) -> np.ndarray:
+        """Responses (N, rows, cols) of feature maps z (N, C, rows, cols): F^-1(sum_k conj(g^_k) z^_k)."""
+        if self.gf is None:
+            raise TrackerError("BACF.respond called before train")
+        zf = rfft2(z)
+        return irfft2(np.einsum("nkhw,khw->nhw", zf, np.conj(self.gf)), self.shape)
