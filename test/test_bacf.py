@@ -1,0 +1,145 @@
+# SPDX-License-Identifier: Apache-2.0
+"""BACF (core/bacf.py): ADMM solves eq. 2 with the filter on the target support, real-patch shifts, params."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from scipy.sparse.linalg import LinearOperator, cg
+
+from swir_tracker_ros.core.bacf import BACF, BACFParams
+from swir_tracker_ros.core.confidence import analyse
+from swir_tracker_ros.core.features import extract_features, feature_shape, sample_patch
+from swir_tracker_ros.core.filters import FILTERS, BACFFilter, make_filter
+from swir_tracker_ros.core.kcf import irfft2, rfft2
+from swir_tracker_ros.core.params import PIPELINES, TrackerParams
+from swir_tracker_ros.core.windows import search_window, template_size
+from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.tracker import Tracker
+from swir_tracker_ros.types import Box, TrackState
+
+SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "sequences" / "otb_crossing"
+
+
+def first_frame() -> tuple[np.ndarray, Box]:
+    if not (SEQ / "000001.png").is_file():
+        pytest.skip(f"real sequence missing: {SEQ}")
+    img = cv2.imread(str(SEQ / "000001.png"), cv2.IMREAD_GRAYSCALE).astype(np.float32) / 255.0
+    x, y, w, h = np.loadtxt(SEQ / "gt.txt", delimiter=",")[0]
+    return img, Box(float(x), float(y), float(w), float(h))
+
+
+def shifted(img: np.ndarray, dx: float, dy: float) -> np.ndarray:
+    M = np.float32([[1, 0, dx], [0, 1, dy]])
+    return cv2.warpAffine(img, M, img.shape[::-1], flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+
+
+def setup(p: BACFParams, img: np.ndarray, box: Box) -> tuple[BACF, Box, int, int]:
+    win = search_window(box.cx, box.cy, box.w, box.h, p.padding)
+    tw, th = template_size(box.w, box.h, p.padding, p.cell_size, 1.0)
+    shape = feature_shape(p.feature, th, tw, p.cell_size)
+    support = (int(box.h // p.cell_size), int(box.w // p.cell_size))
+    return BACF(p, shape, np.sqrt(box.w * box.h) / p.cell_size, support), win, tw, th
+
+
+def features(img: np.ndarray, win: Box, tw: int, th: int, p: BACFParams) -> np.ndarray:
+    return extract_features(sample_patch(img, win, tw, th)[None], p.feature, p.cell_size)
+
+
+def direct_minimum(f: BACF) -> float:
+    """min of eq. 2 over filters on the support, by conjugate gradients on its normal equations."""
+    xf, (rows, cols), (rs, cs) = f.model_xf, f.shape, (f.rows, f.cols)
+    k, sr, sc = xf.shape[0], rs.stop - rs.start, cs.stop - cs.start
+
+    def forward(v: np.ndarray) -> np.ndarray:  # sum_k x_k (*) h_k
+        h = np.zeros((k, rows, cols))
+        h[:, rs, cs] = v.reshape(k, sr, sc)
+        return irfft2(np.einsum("khw,khw->hw", np.conj(rfft2(h)), xf), (rows, cols))
+
+    def adjoint(r: np.ndarray) -> np.ndarray:
+        return irfft2(np.conj(rfft2(r))[None] * xf, (rows, cols))[:, rs, cs].ravel()
+
+    n = k * sr * sc
+    op = LinearOperator((n, n), matvec=lambda v: adjoint(forward(v)) + f.params.lambda_ * v)
+    sol, info = cg(op, adjoint(irfft2(f.yf, (rows, cols))), maxiter=3000, rtol=1e-10)
+    assert info == 0
+    h = np.zeros((k, rows, cols), np.float32)
+    h[:, rs, cs] = sol.reshape(k, sr, sc)
+    return f.objective(h)
+
+
+def test_admm_filter_lives_on_the_support_and_decreases_the_objective() -> None:
+    img, box = first_frame()
+    p = BACFParams()
+    f, win, tw, th = setup(p, img, box)
+    x = features(img, win, tw, th, p)[0]
+    y = irfft2(f.yf, f.shape)
+    trace = f.train(x, 1.0, iterations=p.admm_iterations)  # the reference's 2 iterations
+    assert len(trace) == 2 and trace[1] < trace[0] < 0.5 * float(np.sum(y**2))  # below h = 0
+    outside = np.ones(f.shape, bool)
+    outside[f.rows, f.cols] = False
+    assert f.h is not None and np.all(f.h[:, outside] == 0.0) and np.abs(f.h[:, ~outside]).max() > 0.0
+    assert f.h.shape[1:] == f.shape and f.rows.stop - f.rows.start == int(box.h // 4)
+
+
+def test_admm_converges_to_the_constrained_least_squares_minimum() -> None:
+    """With a fixed penalty (beta = 1) ADMM reaches the minimum of eq. 2 that conjugate gradients find."""
+    img, box = first_frame()
+    p = BACFParams(padding=2.0, admm_mu=1e-3, admm_beta=1.0)
+    f, win, tw, th = setup(p, img, box)
+    trace = f.train(features(img, win, tw, th, p)[0], 1.0, iterations=400)
+    best = direct_minimum(f)
+    assert trace[-1] < 0.05 * trace[0]
+    assert trace[-1] == pytest.approx(best, rel=0.05), (trace[-1], best)
+    assert np.all(np.diff(trace[-100:]) <= 1e-7)  # settled
+
+
+def test_bacf_recovers_shifts_of_a_real_patch_beyond_the_kcf_window() -> None:
+    img, box = first_frame()
+    p = BACFParams()
+    f, win, tw, th = setup(p, img, box)
+    f.train(features(img, win, tw, th, p)[0], 1.0)
+    for dx, dy in [(3.0, -2.0), (-6.0, 5.0), (1.2 * box.w, 0.4 * box.h)]:  # the last: a KCF window's edge
+        pk = analyse(f.respond(features(shifted(img, dx, dy), win, tw, th, p))[0], 3)
+        est = (pk.col * p.cell_size * win.w / tw, pk.row * p.cell_size * win.h / th)
+        assert abs(est[0] - dx) < 2.5 and abs(est[1] - dy) < 2.5, (dx, dy, est)
+
+
+def test_params_validate_and_nest_in_tracker_params() -> None:
+    assert "bacf" in PIPELINES and FILTERS["bacf"] is BACFFilter
+    TrackerParams(pipeline="bacf").validate()
+    for name, value in [("padding", 0.1), ("admm_iterations", 0), ("lambda_", float("nan"))]:
+        p = TrackerParams(pipeline="bacf")
+        setattr(p.bacf, name, value)
+        with pytest.raises(ParameterError, match=f"bacf.{name}"):
+            p.validate()
+    assert BACFParams().output_sigma_factor == pytest.approx(1 / 16)
+    assert BACFParams().psr_threshold == TrackerParams().kcf.psr_threshold  # inherited, written once
+
+
+def test_pipeline_bacf_is_selected_calibrated_and_tracks() -> None:
+    img, box = first_frame()
+    p = TrackerParams(pipeline="bacf")
+    bank = make_filter(p, box.w, box.h)
+    assert isinstance(bank, BACFFilter)
+    cells = (bank.tw // bank.cell) * (bank.th // bank.cell)
+    assert cells <= p.bacf.max_window_cells
+    big = make_filter(p, 4 * box.w, 4 * box.h)  # a large target: the template is capped
+    assert (big.tw // big.cell) * (big.th // big.cell) <= p.bacf.max_window_cells
+    bank.initialise(img, box)
+    win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
+    det = bank.detect(img, [win])[0]
+    assert det.peak == pytest.approx(p.bacf.reference_peak, rel=1e-3)  # first-frame self response
+    frames = [(cv2.imread(str(SEQ / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE)) for i in range(1, 31)]
+    gt = np.loadtxt(SEQ / "gt.txt", delimiter=",")
+    trk = Tracker(p)
+    trk.init(frames[0], box)
+    assert type(trk._bank) is BACFFilter
+    for frame in frames[1:]:
+        res = trk.update(frame)
+    gx, gy, gw, gh = gt[len(frames) - 1]
+    assert res.state is TrackState.TRACKING
+    assert abs(res.box.cx - (gx + gw / 2)) < 0.3 * gw and abs(res.box.cy - (gy + gh / 2)) < 0.3 * gh
