@@ -19,7 +19,8 @@ With the DFT-domain auxiliary filter g^ = sqrt(T) (F P^T (x) I_K) h (eq. 4), the
 - zeta^ <- zeta^ + mu (g^ - h^) (eq. 11), mu <- min(beta mu, mu_max) (eq. 12).
 
 Conventions: unnormalised DFTs (`kcf.rfft2`), the response to a feature map z is
-F^-1(sum_k conj(g^_k) z^_k) (correlation; its peak at (0, 0) means no displacement), the online model
+F^-1(sum_k conj(h^_k) z^_k) (correlation with the constrained filter; its peak at (0, 0) means no
+displacement; the reference code correlates with g^, `detect_with` g), the online model
 is the sample spectrum x^ blended with the learning rate (the reference code), and ADMM restarts from
 g = h = zeta = 0, mu = mu0 on every training call. The half spectra of `rfft2` are enough: every step
 is per frequency or a real inverse/forward transform, so Hermitian symmetry is kept.
@@ -66,6 +67,13 @@ class BACFParams(KCFParams):
     admm_mu: float = _f(1.0, "initial penalty mu of the augmented Lagrangian (eq. 5; BACF: 1)", 1e-6, 1e6)
     admm_beta: float = _f(10.0, "penalty growth mu <- beta mu per iteration (eq. 12; BACF: 10)", 1.0, 1e3)
     admm_mu_max: float = _f(1e4, "largest penalty mu (eq. 12; BACF: 1e4)", 1e-6, 1e9)
+    detect_with: str = _f(
+        "h",
+        "filter that detection correlates with: h, the constrained filter (zero off the target support, "
+        "eq. 8: no boundary effect), or g, the unconstrained ADMM variable of the last iteration (the "
+        "reference code's g_f)",
+        choices=("h", "g"),
+    )
     reference_peak: float = _f(
         1.0,
         "(ours) responses are scaled so the first-frame self-response peaks at this value, as KCF's "
@@ -114,6 +122,7 @@ class BACF:
         self.gf: np.ndarray | None = None  # detection filter: the g^ of the last ADMM iteration
         self.hf: np.ndarray | None = None  # the constrained filter's spectrum (support-limited h)
         self.h: np.ndarray | None = None  # the constrained filter, spatial (C, rows, cols), zero off P
+        self.detector: np.ndarray | None = None  # the spectrum `respond` uses (`detect_with`)
 
     @property
     def trained(self) -> bool:
@@ -163,6 +172,7 @@ class BACF:
             if trace:
                 objective.append(self.objective(h))
         self.gf, self.hf, self.h = gf.astype(np.complex64), hf, h
+        self.detector = self.hf if p.detect_with == "h" else self.gf
         return objective
 
     def objective(self, h: np.ndarray) -> float:
@@ -176,8 +186,9 @@ class BACF:
         return float(0.5 * np.sum((y - r) ** 2) + reg)
 
     def respond(self, z: np.ndarray) -> np.ndarray:
-        """Responses (N, rows, cols) of feature maps z (N, C, rows, cols): F^-1(sum_k conj(g^_k) z^_k)."""
-        if self.gf is None:
+        """Responses (N, rows, cols) of feature maps z (N, C, rows, cols): F^-1(sum_k conj(h^_k) z^_k)
+        (or g^ with `detect_with` g)."""
+        if self.detector is None:
             raise TrackerError("BACF.respond called before train")
         zf = rfft2(z)
-        return irfft2(np.einsum("nkhw,khw->nhw", zf, np.conj(self.gf)), self.shape)
+        return irfft2(np.einsum("nkhw,khw->nhw", zf, np.conj(self.detector)), self.shape)
