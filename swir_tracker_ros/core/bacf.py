@@ -45,16 +45,26 @@ from swir_tracker_ros.paramfield import validate_params
 @dataclass
 class BACFParams(KCFParams):
     """BACF pipeline (ICCV 2017; reference code defaults): filter, window, ADMM. The failure test (PSR),
-    update gate (peak / LMCF) and feature settings are KCF's (inherited); `kernel_sigma` is not read
-    (BACF is a linear filter)."""
+    update gate (peak / LMCF) and feature settings are KCF's (inherited, each default written once in
+    KCFParams); `kernel_sigma` is not read (BACF is a linear filter)."""
 
     padding: float = _f(
         4.0, "training / search window = (1 + padding) x target (BACF: search area scale 5)", 0.5, 8.0
+    )
+    kernel_sigma: float = _f(
+        KCFParams.kernel_sigma, "not read: BACF is a linear filter (inherited from KCFParams)", 0.01, 10.0
     )
     lambda_: float = _f(0.01, "lambda of eq. 2, weight of ||h||^2 (BACF: 0.01)", 1e-8, 10.0)
     interp_factor: float = _f(0.013, "learning rate of the sample model (BACF: 0.013)", 0.0, 1.0)
     output_sigma_factor: float = _f(
         1.0 / 16.0, "Gaussian label sigma = sqrt(w h) x factor / cell (BACF: 1/16)", 0.01, 1.0
+    )
+    window_shape: str = _f(
+        "square",
+        "square: every window is a square of the proportional window's area, side (1 + padding) sqrt(w h) "
+        "(BACF reference: search_area_shape square; more context across a tall pedestrian's path); "
+        "proportional: (1 + padding) x the target's width and height, as kcf",
+        choices=("square", "proportional"),
     )
     max_window_cells: int = _f(
         2500,

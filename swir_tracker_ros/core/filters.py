@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -128,31 +129,62 @@ class BACFFilter(KCFFilter):
     pipeline's frame: PSR failure test, peak / LMCF update gate, eq. 38 threshold map, 7-state box model
     (inherited from `KCFFilter`).
 
-    The window is (1 + padding) x the target (BACF: 5x), resampled so that its feature map has at most
-    `max_window_cells` cells (BACF's filter_max_area); the filter is the target's size in cells. Responses
-    are scaled so that the first-frame self-response peaks at `reference_peak` (~1, as KCF's).
+    The window is (1 + padding) x the target (BACF: 5x), by default made square with the same area
+    (`window_shape`), and resampled so that its feature map has at most `max_window_cells` cells (BACF's
+    filter_max_area); the filter is the target's size in cells. The tracker hands in proportional
+    windows; `features`, `_detections`, `detect_grid` and `detect_lattice` turn each into its square
+    (same centre and area), so every pixel <-> cell mapping uses the square. Responses are scaled so
+    that the first-frame self-response peaks at `reference_peak` (~1, as KCF's).
     """
 
     name = "bacf"
 
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         self._size = (w, h)
+        self._square = p.bacf.window_shape == "square"
         super().__init__(p, w, h)
+
+    def _window(self, win: Box) -> Box:
+        """The window the filter samples for the tracker's (proportional) window `win`."""
+        if not self._square or win.w == win.h:
+            return win
+        side = math.sqrt(win.w * win.h)
+        return Box.from_center(win.cx, win.cy, side, side)
 
     def _build(self) -> BACF:
         fp = self.fp
         w, h = self._size
+        tw, th = (math.sqrt(w * h),) * 2 if self._square else (w, h)
+        self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale)
         cells = (self.tw // self.cell) * (self.th // self.cell)
         if cells > fp.max_window_cells:  # BACF filter_max_area: a coarser template, the same window
             self.model_scale *= math.sqrt(fp.max_window_cells / cells)
-            self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale)
-            self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
-            self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+            self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale)
+        self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
+        self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
         support = (
             max(1, math.floor(h * self.model_scale / self.cell)),
             max(1, math.floor(w * self.model_scale / self.cell)),
         )
         return BACF(fp, self.shape, self.target_cells, support)
+
+    def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
+        return super().features(img, [self._window(w) for w in windows])
+
+    def _detections(
+        self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]
+    ) -> list[Detection]:
+        return super()._detections(responses, [self._window(w) for w in windows], scales)
+
+    def detect_grid(
+        self, img: np.ndarray, window: Box, overlap: float, scale: float = 1.0, skip_centre: bool = True
+    ) -> tuple[list[Detection], list[Box]]:
+        return super().detect_grid(img, self._window(window), overlap, scale, skip_centre)
+
+    def detect_lattice(
+        self, img: np.ndarray, window: Box, step: float, rings: int, scale: float = 1.0
+    ) -> tuple[list[Detection], list[Box]]:
+        return super().detect_lattice(img, self._window(window), step, rings, scale)
 
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """First-frame training, then the response gain from the filter's own training sample."""
@@ -161,7 +193,6 @@ class BACFFilter(KCFFilter):
             win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
             self_peak = float(self.filter.respond(self.features(img, [win])).max())
             self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
-
 
 FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter)}
 """Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
