@@ -35,6 +35,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft as sfft
 
 from swir_tracker_ros.core.kcf import KCFParams, gaussian_label_spectrum, irfft2, rfft2
 from swir_tracker_ros.errors import TrackerError
@@ -128,6 +129,13 @@ class BACF:
         sigma = max(target_cells * params.output_sigma_factor, 0.25)
         self.yf = gaussian_label_spectrum(self.shape[0], self.shape[1], float(sigma))
         self.rows, self.cols = support_mask(self.shape, support)
+        # Pruned transforms of the h-step: h is zero off the support rows, so the DFT along the rows
+        # is a (rows x support-rows) matrix product each way (K R s_r (C/2+1) products instead of two
+        # full 2-D transforms of the K channels).
+        n, r = self.shape[0], np.arange(self.rows.start, self.rows.stop)
+        phase = 2j * np.pi * np.outer(np.arange(n), r) / n
+        self._row_dft = np.exp(-phase).astype(np.complex64)  # (R, s_r): support rows -> frequencies
+        self._row_idft = (np.exp(phase).T / n).astype(np.complex64)  # (s_r, R): frequencies -> rows
         self.model_xf: np.ndarray | None = None
         self.gf: np.ndarray | None = None  # detection filter: the g^ of the last ADMM iteration
         self.hf: np.ndarray | None = None  # the constrained filter's spectrum (support-limited h)
@@ -157,33 +165,44 @@ class BACF:
         mf = self.model_xf
         T = float(self.shape[0] * self.shape[1])
         yf = self.yf
-        sxx = np.einsum("khw,khw->hw", mf, np.conj(mf)).real.astype(np.float32)  # x^H x per frequency
+        mfc = np.conj(mf)
+        sxx = np.einsum("khw,khw->hw", mf, mfc).real.astype(np.float32)  # x^H x per frequency
         xy = mf * np.conj(yf)  # x conj(y)
         gf = np.zeros_like(mf)
         hf = np.zeros_like(mf)
         lf = np.zeros_like(mf)
-        h = np.zeros((mf.shape[0], *self.shape), dtype=np.float32)
+        cols = self.shape[1]
+        block = np.zeros((mf.shape[0], self._row_idft.shape[0], cols), dtype=np.float32)
         mu = p.admm_mu
         objective: list[float] = []
-        for _ in range(n_iter):
+        for it in range(n_iter):
             # g^-subproblem (eq. 10, Sherman-Morrison): c = x conj(y) - T zeta + T mu h; g = c / (T mu) -
             # x (x^H c) / (T mu (T mu + x^H x))
             tm = T * mu
-            c = xy - T * lf + tm * hf
-            xc = np.einsum("khw,khw->hw", np.conj(mf), c)
-            gf = (c - mf * (xc / (tm + sxx))[None]) / tm
-            # h-subproblem (eq. 8): unconstrained solution cropped to the support P
-            full = irfft2(mu * gf + lf, self.shape)
-            h.fill(0.0)
-            h[:, self.rows, self.cols] = (T / (p.lambda_ + tm)) * full[:, self.rows, self.cols]
-            hf = rfft2(h).astype(np.complex64)
+            if it == 0:  # zeta = h = 0: c = x conj(y), and x^H c = (x^H x) conj(y), so g = c / (T mu + x^H x)
+                gf = xy / (tm + sxx)[None]
+            else:
+                c = xy - T * lf + tm * hf
+                xc = np.einsum("khw,khw->hw", mfc, c)
+                gf = (c - mf * (xc / (tm + sxx))[None]) / tm
+            # h-subproblem (eq. 8): the unconstrained solution cropped to the support P; inverse DFT of
+            # the support rows only, then of the columns (an irfft2 restricted to the rows of P)
+            rows = sfft.irfft(np.matmul(self._row_idft, mu * gf + lf), n=cols, axis=-1, workers=1)
+            block[:, :, self.cols] = (T / (p.lambda_ + tm)) * rows[:, :, self.cols]
+            hf = np.matmul(self._row_dft, sfft.rfft(block, axis=-1, workers=1).astype(np.complex64))
             lf = lf + mu * (gf - hf)  # eq. 11
             mu = min(p.admm_beta * mu, p.admm_mu_max)  # eq. 12
             if trace:
-                objective.append(self.objective(h))
-        self.gf, self.hf, self.h = gf.astype(np.complex64), hf, h
+                objective.append(self.objective(self._spatial(block)))
+        self.gf, self.hf, self.h = gf.astype(np.complex64), hf, self._spatial(block)
         self.detector = self.hf if p.detect_with == "h" else self.gf
         return objective
+
+    def _spatial(self, block: np.ndarray) -> np.ndarray:
+        """The full-window filter (K, rows, cols) from its support rows (K, s_r, cols)."""
+        h = np.zeros((block.shape[0], *self.shape), dtype=np.float32)
+        h[:, self.rows] = block
+        return h
 
     def objective(self, h: np.ndarray) -> float:
         """E(h) of eq. 2 for the current sample model: 1/2 ||y - sum_k x_k (*) h_k||^2 + lambda/2 ||h||^2."""
