@@ -143,3 +143,26 @@ def test_pipeline_bacf_is_selected_calibrated_and_tracks() -> None:
     gx, gy, gw, gh = gt[len(frames) - 1]
     assert res.state is TrackState.TRACKING
     assert abs(res.box.cx - (gx + gw / 2)) < 0.3 * gw and abs(res.box.cy - (gy + gh / 2)) < 0.3 * gh
+
+
+@pytest.mark.parametrize("shape", ["square", "proportional"])
+def test_filter_maps_peaks_to_image_pixels_for_both_window_shapes(shape: str) -> None:
+    """The tracker hands in proportional windows; a square filter window must still map its peak (and
+    the re-detection lattice's) back to the right image pixels."""
+    img, box = first_frame()
+    p = TrackerParams(pipeline="bacf")
+    p.bacf.window_shape = shape
+    bank = make_filter(p, box.w, box.h)
+    assert (bank.tw == bank.th) == (shape == "square")
+    bank.initialise(img, box)
+    win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
+    dx, dy = 7.0, -5.0
+    moved = shifted(img, dx, dy)
+    det = bank.detect(moved, [win])[0]
+    assert abs(det.cx - box.cx - dx) < 1.5 and abs(det.cy - box.cy - dy) < 1.5, (det.cx, det.cy)
+    side = np.sqrt(win.w * win.h)
+    assert det.window.w == pytest.approx(side if shape == "square" else win.w)
+    off = win.shifted(-0.6 * win.w, 0.3 * win.h)  # the lattice around a prediction off the target
+    dets, _ = bank.detect_lattice(moved, off, 0.35, 2)
+    best = max(dets, key=lambda d: d.peak)
+    assert abs(best.cx - box.cx - dx) < 2.0 and abs(best.cy - box.cy - dy) < 2.0
