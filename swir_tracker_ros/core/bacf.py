@@ -61,10 +61,10 @@ class BACFParams(KCFParams):
         1.0 / 16.0, "Gaussian label sigma = sqrt(w h) x factor / cell (BACF: 1/16)", 0.01, 1.0
     )
     window_shape: str = _f(
-        "square",
-        "square: every window is a square of the proportional window's area, side (1 + padding) sqrt(w h) "
-        "(BACF reference: search_area_shape square; more context across a tall pedestrian's path); "
-        "proportional: (1 + padding) x the target's width and height, as kcf",
+        "proportional",
+        "proportional: (1 + padding) x the target's width and height, as kcf (better here under SRE: "
+        "docs/tracking_core.md); square: a square of the same area, side (1 + padding) sqrt(w h) (BACF "
+        "reference: search_area_shape square)",
         choices=("square", "proportional"),
     )
     max_window_cells: int = _f(
