@@ -85,6 +85,14 @@ class BACFParams(KCFParams):
         "reference code's g_f)",
         choices=("h", "g"),
     )
+    psr_ratio: float = _f(
+        0.0,
+        "(ours) failure also when PSR < this ratio x the mean PSR of the frames that updated the model "
+        "(relative test as LMCF's / the dissertation's APCE tests); psr_threshold stays the absolute "
+        "floor; 0: psr_threshold alone (paper 000)",
+        0.0,
+        2.0,
+    )
     reference_peak: float = _f(
         1.0,
         "(ours) responses are scaled so the first-frame self-response peaks at this value, as KCF's "

@@ -142,6 +142,7 @@ class BACFFilter(KCFFilter):
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         self._size = (w, h)
         self._square = p.bacf.window_shape == "square"
+        self._psr_sum, self._psr_n = 0.0, 0  # PSR of the frames that updated the model (psr_ratio)
         super().__init__(p, w, h)
 
     def _window(self, win: Box) -> Box:
@@ -193,6 +194,22 @@ class BACFFilter(KCFFilter):
             win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
             self_peak = float(self.filter.respond(self.features(img, [win])).max())
             self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
+
+    def failed(self, det: Detection) -> bool:
+        """PSR < psr_threshold (paper 000), or (psr_ratio > 0) PSR < psr_ratio x the mean PSR of the
+        frames that updated the model: the sharp BACF response keeps a PSR of 7-9 on static structure
+        (an occluder's edge) where KCF's falls below 7."""
+        if super().failed(det):
+            return True
+        n = self._psr_n
+        return self.fp.psr_ratio > 0.0 and n > 0 and det.psr < self.fp.psr_ratio * self._psr_sum / n
+
+    def confident(self, det: Detection) -> bool:
+        ok = super().confident(det)
+        if ok:
+            self._psr_sum += det.psr
+            self._psr_n += 1
+        return ok
 
 FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter)}
 """Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
