@@ -166,3 +166,21 @@ def test_filter_maps_peaks_to_image_pixels_for_both_window_shapes(shape: str) ->
     dets, _ = bank.detect_lattice(moved, off, 0.35, 2)
     best = max(dets, key=lambda d: d.peak)
     assert abs(best.cx - box.cx - dx) < 2.0 and abs(best.cy - box.cy - dy) < 2.0
+
+
+def test_relative_psr_failure_test() -> None:
+    """psr_ratio: a PSR above the absolute threshold still fails below ratio x the mean PSR of the frames
+    that updated the model (static structure under the sharp BACF response); off at 0."""
+    from swir_tracker_ros.core.base import Detection
+
+    win = Box(0.0, 0.0, 50.0, 50.0)
+    tracked = Detection(25.0, 25.0, 0.8, 14.0, 60.0, 1.0, win)
+    wall = Detection(25.0, 25.0, 0.35, 8.0, 25.0, 1.0, win)
+    for ratio, expected in [(0.6, True), (0.0, False)]:
+        p = TrackerParams(pipeline="bacf")
+        p.bacf.psr_ratio = ratio
+        bank = make_filter(p, 10.0, 10.0)
+        assert not bank.failed(wall)  # no updated frame yet: the absolute threshold (7) alone
+        for _ in range(3):
+            assert not bank.failed(tracked) and bank.confident(tracked)
+        assert bank.failed(wall) is expected
