@@ -85,6 +85,14 @@ class BACFParams(KCFParams):
         "reference code's g_f)",
         choices=("h", "g"),
     )
+    psr_window: float = _f(
+        2.5,
+        "(ours) the PSR sidelobe is taken over this many target sizes around the peak (the kcf window: "
+        "2.5), not over the whole 5x response, so a look-alike farther away does not count as failure and "
+        "the paper 000 threshold keeps its meaning; 0: the whole response",
+        0.0,
+        10.0,
+    )
     psr_ratio: float = _f(
         0.0,
         "(ours) failure also when PSR < this ratio x the mean PSR of the frames that updated the model "

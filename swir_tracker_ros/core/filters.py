@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -10,6 +11,7 @@ import numpy as np
 
 from swir_tracker_ros.core.bacf import BACF
 from swir_tracker_ros.core.base import BaseFilter, Detection
+from swir_tracker_ros.core.confidence import psr
 from swir_tracker_ros.core.dcf_ca import DCFCA, context_offsets
 from swir_tracker_ros.core.features import feature_shape
 from swir_tracker_ros.core.kcf import KCF
@@ -175,7 +177,19 @@ class BACFFilter(KCFFilter):
     def _detections(
         self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]
     ) -> list[Detection]:
-        return super()._detections(responses, [self._window(w) for w in windows], scales)
+        dets = super()._detections(responses, [self._window(w) for w in windows], scales)
+        k = self.fp.psr_window / (1.0 + self.padding)
+        if k <= 0.0 or k >= 1.0:
+            return dets
+        return [dataclasses.replace(d, psr=self._local_psr(r, k)) for d, r in zip(dets, responses)]
+
+    def _local_psr(self, resp: np.ndarray, k: float) -> float:
+        """PSR (paper 000 eq. 10) of the part of `resp` k x its size around the peak (circular)."""
+        rows, cols = resp.shape
+        r, c = divmod(int(np.argmax(resp)), cols)
+        lh, lw = max(5, round(rows * k)), max(5, round(cols * k))
+        local = resp[np.ix_((r + np.arange(lh) - lh // 2) % rows, (c + np.arange(lw) - lw // 2) % cols)]
+        return psr(local, lh // 2, lw // 2, self.exclusion)
 
     def detect_grid(
         self, img: np.ndarray, window: Box, overlap: float, scale: float = 1.0, skip_centre: bool = True
