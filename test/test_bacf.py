@@ -184,3 +184,25 @@ def test_relative_psr_failure_test() -> None:
         for _ in range(3):
             assert not bank.failed(tracked) and bank.confident(tracked)
         assert bank.failed(wall) is expected
+
+
+def test_psr_is_taken_around_the_peak_over_psr_window_target_sizes() -> None:
+    """A look-alike beyond 2.5 target sizes from the peak (inside the 5x window) leaves the PSR as a
+    kcf window would see it; one next to the peak still lowers it."""
+    from swir_tracker_ros.core.confidence import psr
+
+    p = TrackerParams(pipeline="bacf")
+    bank = make_filter(p, 40.0, 40.0)
+    rows, cols = bank.shape[1:]
+    rng = np.random.default_rng(3)
+    far = rng.normal(0.0, 0.02, (rows, cols)).astype(np.float32)
+    far[0, 0] = 1.0
+    near = far.copy()
+    r, c, e = rows // 2, cols // 2, 2 * bank.exclusion
+    far[r - 1 : r + 2, c - 1 : c + 2] = 0.9  # a look-alike half a window away: outside 2.5 target sizes
+    near[e - 1 : e + 2, 0:2] = 0.9  # one just outside the exclusion zone
+    k = p.bacf.psr_window / (1.0 + p.bacf.padding)
+    assert bank._local_psr(far, k) > 2.0 * psr(far, 0, 0, bank.exclusion)
+    assert bank._local_psr(near, k) < 0.5 * bank._local_psr(far, k)
+    det = bank._detections(far[None], [Box(0.0, 0.0, 200.0, 200.0)], [1.0])[0]
+    assert det.psr == pytest.approx(bank._local_psr(far, k))
