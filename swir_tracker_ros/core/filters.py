@@ -3,13 +3,20 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
+from collections.abc import Sequence
+
 import numpy as np
 
+from swir_tracker_ros.core.bacf import BACF
 from swir_tracker_ros.core.base import BaseFilter, Detection
+from swir_tracker_ros.core.confidence import psr
 from swir_tracker_ros.core.dcf_ca import DCFCA, context_offsets
+from swir_tracker_ros.core.features import feature_shape
 from swir_tracker_ros.core.kcf import KCF
 from swir_tracker_ros.core.params import PIPELINES, TrackerParams
-from swir_tracker_ros.core.windows import search_window
+from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman import DISSERTATION_DCFCA, PAPER000_KCF, BoxModel, dcfca_box_model, kcf_box_model
 from swir_tracker_ros.types import Box
@@ -119,7 +126,106 @@ class DCFCAFilter(BaseFilter):
         return dcfca_box_model(w, h)
 
 
-FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter)}
+class BACFFilter(KCFFilter):
+    """Background-aware correlation filter (Kiani Galoogahi et al., ICCV 2017; core/bacf.py) in the KCF
+    pipeline's frame: PSR failure test, peak / LMCF update gate, eq. 38 threshold map, 7-state box model
+    (inherited from `KCFFilter`).
+
+    The window is (1 + padding) x the target (BACF: 5x), by default made square with the same area
+    (`window_shape`), and resampled so that its feature map has at most `max_window_cells` cells (BACF's
+    filter_max_area); the filter is the target's size in cells. The tracker hands in proportional
+    windows; `features`, `_detections`, `detect_grid` and `detect_lattice` turn each into its square
+    (same centre and area), so every pixel <-> cell mapping uses the square. Responses are scaled so
+    that the first-frame self-response peaks at `reference_peak` (~1, as KCF's).
+    """
+
+    name = "bacf"
+
+    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+        self._size = (w, h)
+        self._square = p.bacf.window_shape == "square"
+        self._psr_sum, self._psr_n = 0.0, 0  # PSR of the frames that updated the model (psr_ratio)
+        super().__init__(p, w, h)
+
+    def _window(self, win: Box) -> Box:
+        """The window the filter samples for the tracker's (proportional) window `win`."""
+        if not self._square or win.w == win.h:
+            return win
+        side = math.sqrt(win.w * win.h)
+        return Box.from_center(win.cx, win.cy, side, side)
+
+    def _build(self) -> BACF:
+        fp = self.fp
+        w, h = self._size
+        tw, th = (math.sqrt(w * h),) * 2 if self._square else (w, h)
+        self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale)
+        cells = (self.tw // self.cell) * (self.th // self.cell)
+        if cells > fp.max_window_cells:  # BACF filter_max_area: a coarser template, the same window
+            self.model_scale *= math.sqrt(fp.max_window_cells / cells)
+            self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale)
+        self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
+        self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+        support = (
+            max(1, math.floor(h * self.model_scale / self.cell)),
+            max(1, math.floor(w * self.model_scale / self.cell)),
+        )
+        return BACF(fp, self.shape, self.target_cells, support)
+
+    def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
+        return super().features(img, [self._window(w) for w in windows])
+
+    def _detections(
+        self, responses: np.ndarray, windows: Sequence[Box], scales: Sequence[float]
+    ) -> list[Detection]:
+        dets = super()._detections(responses, [self._window(w) for w in windows], scales)
+        k = self.fp.psr_window / (1.0 + self.padding)
+        if k <= 0.0 or k >= 1.0:
+            return dets
+        return [dataclasses.replace(d, psr=self._local_psr(r, k)) for d, r in zip(dets, responses)]
+
+    def _local_psr(self, resp: np.ndarray, k: float) -> float:
+        """PSR (paper 000 eq. 10) of the part of `resp` k x its size around the peak (circular)."""
+        rows, cols = resp.shape
+        r, c = divmod(int(np.argmax(resp)), cols)
+        lh, lw = max(5, round(rows * k)), max(5, round(cols * k))
+        local = resp[np.ix_((r + np.arange(lh) - lh // 2) % rows, (c + np.arange(lw) - lw // 2) % cols)]
+        return psr(local, lh // 2, lw // 2, self.exclusion)
+
+    def detect_grid(
+        self, img: np.ndarray, window: Box, overlap: float, scale: float = 1.0, skip_centre: bool = True
+    ) -> tuple[list[Detection], list[Box]]:
+        return super().detect_grid(img, self._window(window), overlap, scale, skip_centre)
+
+    def detect_lattice(
+        self, img: np.ndarray, window: Box, step: float, rings: int, scale: float = 1.0
+    ) -> tuple[list[Detection], list[Box]]:
+        return super().detect_lattice(img, self._window(window), step, rings, scale)
+
+    def initialise(self, img: np.ndarray, box: Box) -> None:
+        """First-frame training, then the response gain from the filter's own training sample."""
+        super().initialise(img, box)
+        if self.fp.reference_peak > 0:
+            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+            self_peak = float(self.filter.respond(self.features(img, [win])).max())
+            self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
+
+    def failed(self, det: Detection) -> bool:
+        """PSR < psr_threshold (paper 000), or (psr_ratio > 0) PSR < psr_ratio x the mean PSR of the
+        frames that updated the model: the sharp BACF response keeps a PSR of 7-9 on static structure
+        (an occluder's edge) where KCF's falls below 7."""
+        if super().failed(det):
+            return True
+        n = self._psr_n
+        return self.fp.psr_ratio > 0.0 and n > 0 and det.psr < self.fp.psr_ratio * self._psr_sum / n
+
+    def confident(self, det: Detection) -> bool:
+        ok = super().confident(det)
+        if ok:
+            self._psr_sum += det.psr
+            self._psr_n += 1
+        return ok
+
+FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter)}
 """Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from swir_tracker_ros.core.bacf import BACFParams
 from swir_tracker_ros.core.dcf_ca import DCFCAParams
 from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.errors import ParameterError
@@ -16,7 +17,7 @@ from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 
 VARIANTS = ("cf", "kalman", "robust", "robust_adaptive", "robust_adaptive_r", "measured")
-PIPELINES = ("kcf", "dcf_ca")
+PIPELINES = ("kcf", "dcf_ca", "bacf")
 
 
 @dataclass
@@ -38,7 +39,8 @@ class TrackerParams:
     )
     pipeline: str = _f(
         "kcf",
-        "kcf: paper 000 (KCF, PSR failure detection); dcf_ca: dissertation (DCF-CA, APCE)",
+        "kcf: paper 000 (KCF, PSR failure detection); dcf_ca: dissertation (DCF-CA, APCE); bacf: "
+        "background-aware correlation filter (Kiani Galoogahi et al., ICCV 2017) with kcf's failure test",
         choices=PIPELINES,
     )
     kcf: KCFParams = field(
@@ -46,6 +48,9 @@ class TrackerParams:
     )
     dcf_ca: DCFCAParams = field(
         default_factory=DCFCAParams, metadata={"doc": "dissertation DCF-CA pipeline (core/dcf_ca.py)"}
+    )
+    bacf: BACFParams = field(
+        default_factory=BACFParams, metadata={"doc": "background-aware CF pipeline (core/bacf.py BACFParams)"}
     )
     scale_step: float = _f(0.05, "relative size step of the scale samples (paper 000: 5 %)", 0.0, 0.3)
     n_scales: int = _f(5, "scale samples around the predicted size (1, 3 or 5)", 1, 5)
@@ -75,7 +80,7 @@ class TrackerParams:
     fixed_huber_threshold: float = _f(HUBER_K, "Huber threshold of the `robust` variant", 0.05, 10.0)
     robust_method: str = _f(
         "auto",
-        "statistical linearisation of the robust update; auto: A4 for kcf "
+        "statistical linearisation of the robust update; auto: A4 for kcf and bacf "
         "(paper 000 eq. 33-35), A2 for dcf_ca (dissertation eq. 5.52)",
         choices=("auto", "A2", "A4"),
     )
@@ -190,7 +195,7 @@ class TrackerParams:
         if self.stretch_low_percentile >= self.stretch_high_percentile:
             raise ParameterError("parameter stretch_low_percentile must be below stretch_high_percentile")
 
-    def filter_params(self) -> KCFParams | DCFCAParams:
+    def filter_params(self) -> KCFParams | DCFCAParams | BACFParams:
         """The Params of the selected pipeline's base filter (`kcf`, `dcf_ca`, ...)."""
         return getattr(self, self.pipeline)
 
