@@ -55,6 +55,13 @@ class BACFParams(KCFParams):
     kernel_sigma: float = _f(
         KCFParams.kernel_sigma, "not read: BACF is a linear filter (inherited from KCFParams)", 0.01, 10.0
     )
+    feature: str = _f(
+        "hog_soft",
+        "filter features (choices as kcf.feature): soft FHOG, what BACF was measured with here "
+        "(docs/tracking_core.md); hog_gray is the BACF paper's HOG + grayscale (with it the pipeline test "
+        "on OTB crossing went `occluded` at frame 30: not tuned for it)",
+        choices=KCFParams.__dataclass_fields__["feature"].metadata["choices"],
+    )
     lambda_: float = _f(0.01, "lambda of eq. 2, weight of ||h||^2 (BACF: 0.01)", 1e-8, 10.0)
     interp_factor: float = _f(0.013, "learning rate of the sample model (BACF: 0.013)", 0.0, 1.0)
     output_sigma_factor: float = _f(
