@@ -30,7 +30,7 @@ from swir_tracker_ros.core.features import (
 from swir_tracker_ros.core.fhog import corr_jit
 from swir_tracker_ros.core.params import TrackerParams
 from swir_tracker_ros.core.scale import ScaleFilter
-from swir_tracker_ros.core.windows import template_size
+from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.kalman import BoxModel, ThresholdMap
 from swir_tracker_ros.types import Box
 
@@ -121,6 +121,14 @@ class BaseFilter(ABC):
         """First-frame training."""
         self.gain = 1.0
         self.train(img, box, 1.0)
+
+    def calibrate_gain(self, img: np.ndarray, box: Box, reference_peak: float) -> None:
+        """Scale the responses so that the filter's first-frame self-response at `box` peaks at
+        `reference_peak` (0: off); PSR and APCE are scale-invariant (DCF-CA, BACF: their Params)."""
+        if reference_peak > 0:
+            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
+            self_peak = float(self.filter.respond(self.features(img, [win])).max())
+            self.gain = reference_peak / self_peak if self_peak > 1e-12 else 1.0
 
     def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
         """Windowed feature maps (N, C, rows, cols) of the image regions `windows`."""

@@ -77,13 +77,13 @@ def analyse(response: np.ndarray, exclusion: int = 10) -> Peak:
         if w > 2
         else 0.0
     )
-    row = r + dr
-    col = c + dc
-    if row >= h / 2:
-        row -= h
-    if col >= w / 2:
-        col -= w
+    row, col = _signed(r + dr, h), _signed(c + dc, w)
     return Peak(row=row, col=col, value=value, psr=psr(response, r, c, exclusion), apce=apce(response))
+
+
+def _signed(pos: float, n: int) -> float:
+    """Circular response coordinate -> signed displacement: positions past the middle are negative."""
+    return pos - n if pos >= n / 2 else pos
 
 
 def analyse_batch(responses: np.ndarray, exclusion: int = 10) -> list[Peak]:
@@ -127,12 +127,7 @@ def analyse_batch(responses: np.ndarray, exclusion: int = 10) -> list[Peak]:
         r, c, value = int(r_idx[k]), int(c_idx[k]), values[k]
         dr = subpixel_offset(up[k], value, down[k]) if h > 2 else 0.0
         dc = subpixel_offset(left[k], value, right[k]) if w > 2 else 0.0
-        row = r + dr
-        col = c + dc
-        if row >= h / 2:
-            row -= h
-        if col >= w / 2:
-            col -= w
+        row, col = _signed(r + dr, h), _signed(c + dc, w)
         if n_side < 2:
             p = 0.0
         else:

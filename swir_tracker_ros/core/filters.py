@@ -95,10 +95,7 @@ class DCFCAFilter(BaseFilter):
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """First-frame training, then the response gain from the filter's own training sample."""
         super().initialise(img, box)
-        if self.fp.reference_peak > 0:
-            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
-            self_peak = float(self.filter.respond(self.features(img, [win])).max())
-            self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
+        self.calibrate_gain(img, box, self.fp.reference_peak)
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         """Learn from the window around `box` plus 4 context windows one target size away."""
@@ -204,10 +201,7 @@ class BACFFilter(KCFFilter):
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """First-frame training, then the response gain from the filter's own training sample."""
         super().initialise(img, box)
-        if self.fp.reference_peak > 0:
-            win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
-            self_peak = float(self.filter.respond(self.features(img, [win])).max())
-            self.gain = self.fp.reference_peak / self_peak if self_peak > 1e-12 else 1.0
+        self.calibrate_gain(img, box, self.fp.reference_peak)
 
     def failed(self, det: Detection) -> bool:
         """PSR < psr_threshold (paper 000), or (psr_ratio > 0) PSR < psr_ratio x the mean PSR of the
