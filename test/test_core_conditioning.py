@@ -64,15 +64,17 @@ def test_dead_pixels_fields_and_downscale() -> None:
 
 
 def test_tracker_params_are_documented_and_validated() -> None:
+    from swir_tracker_ros.core.bacf import BACFParams
     from swir_tracker_ros.core.dcf_ca import DCFCAParams
     from swir_tracker_ros.core.kcf import KCFParams
     from swir_tracker_ros.core.scale import DSSTParams
 
     p = TrackerParams()
     p.validate()
-    for cls in (TrackerParams, KCFParams, DCFCAParams, DSSTParams):
+    nested = ("KCFParams", "DCFCAParams", "BACFParams", "DSSTParams")
+    for cls in (TrackerParams, KCFParams, DCFCAParams, BACFParams, DSSTParams):
         for f in dataclasses.fields(cls):
-            assert f.type in ("str", "int", "float", "bool", "KCFParams", "DCFCAParams", "DSSTParams"), f.name
+            assert f.type in ("str", "int", "float", "bool", *nested), f.name
             assert f.metadata.get("doc"), f.name
             if f.type == "str":
                 assert f.default in f.metadata["choices"]

@@ -119,7 +119,11 @@ def test_persistent_resolution_change_reinitialises_on_the_scaled_box(tracked: N
     assert all(s in ACTIVE for s in states), states
     assert states[-1] is TrackState.TRACKING
     box = box_from_polygon(tracked.boxes[-1])
-    assert abs(box.cx - 2 * pos_x(tracked.k - 1)) < 6 and abs(box.w - 2 * TW) < 8, box
+    # the restart box is the last tracked box scaled: it lags the target by the frames skipped while the
+    # change was confirmed (FORMAT_CHANGE_FRAMES - 1 frames at 2 px each at the doubled size), and the new
+    # model learns that offset; allow that lag plus 4 px
+    lag = 2.0 * (FORMAT_CHANGE_FRAMES - 1)
+    assert abs(box.cx - 2 * pos_x(tracked.k - 1)) < lag + 4.0 and abs(box.w - 2 * TW) < 8, box
 
 
 def _random_malformed(rng: np.random.Generator) -> Image:
