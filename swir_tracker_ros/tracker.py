@@ -221,7 +221,7 @@ class Tracker:
         rescan = p.redetect_rescan and not failed and self._occluded > 0 and self._weak(det.peak)
         failed = failed or rescan
         mode = SearchMode.NORMAL
-        shown: tuple[Box, ...] = (wins[len(wins) // 2],)
+        shown: tuple[Box, ...] = (wins[mid],)
         if failed:
             mode = SearchMode.MULTI_WINDOW
             # Re-detection measures no size (it is taken from the prediction), so nothing could correct

@@ -55,8 +55,7 @@ def percentile_limits(
     """Robust black/white levels from a regular subsample of the image (no allocation of the full sort)."""
     step = max(1, int(np.sqrt(gray.size / max_samples)))
     sample = gray[::step, ::step].ravel().astype(np.float32, copy=False)
-    lo, hi = _percentiles(sample, low, high)
-    return lo, hi
+    return _percentiles(sample, low, high)
 
 
 def _percentiles(sample: np.ndarray, low: float, high: float) -> tuple[float, float]:
@@ -116,7 +115,7 @@ class FrameConditioner:
         dtype = gray.dtype
         if dtype == np.bool_ or not (np.issubdtype(dtype, np.integer) or np.issubdtype(dtype, np.floating)):
             raise ConditioningError(f"frame dtype {dtype} is not an integer or float image type")
-        fused = False
+        fused, cj = False, None
         if np.issubdtype(dtype, np.floating):
             img = gray.astype(np.float32, copy=False)
             owned = img is not gray and not np.shares_memory(img, frame)
@@ -143,7 +142,7 @@ class FrameConditioner:
             span = max(hi - lo, 1e-6 * max(abs(hi), 1.0), 1e-12)
             if fused:  # convert, subtract, scale and clip in one compiled pass (the same float32 steps)
                 scale = np.float32(1.0 / span)
-                corr_jit().stretch_kernel(np.ascontiguousarray(gray), np.float32(lo), scale, img)
+                cj.stretch_kernel(np.ascontiguousarray(gray), np.float32(lo), scale, img)
             else:
                 img = np.subtract(img, np.float32(lo), out=img if owned else None)
                 img *= np.float32(1.0 / span)

@@ -219,6 +219,7 @@ class BACFFilter(KCFFilter):
             self._psr_n += 1
         return ok
 
+
 FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter)}
 """Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
 

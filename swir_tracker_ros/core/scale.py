@@ -74,7 +74,6 @@ class DSSTParams:
     def validate(self) -> None:
         validate_params(self, "dsst.")
 
-
     def check(self) -> None:
         """n_scales must be odd (the label and the factors are centred on scale 1)."""
         if self.n_scales % 2 == 0:
