@@ -15,6 +15,7 @@ buffer (fresh multi-MB arrays cost a page fault per 4 kB; docs/speed.md).
 
 from __future__ import annotations
 
+import importlib
 from functools import lru_cache
 from types import ModuleType
 
@@ -100,34 +101,24 @@ USE_JIT = True
 """Use the compiled loops (core/fhog_jit.py) when numba is importable; False forces the numpy path."""
 
 
-@lru_cache(maxsize=1)
-def _jit_module() -> ModuleType | None:
-    """core/fhog_jit.py, or None when numba is not installed (imported on first use: numba's import
-    costs ~0.6 s, its first compile ~2 s a loop, then loaded from its on-disk cache)."""
+@lru_cache(maxsize=2)
+def _compiled_module(name: str) -> ModuleType | None:
+    """core/<name>.py (numba loops: fhog_jit, corr_jit), or None when numba is not installed (imported on
+    first use: numba's import costs ~0.6 s, its first compile ~2 s a loop, then loaded from its on-disk
+    cache)."""
     try:
-        from swir_tracker_ros.core import fhog_jit
+        return importlib.import_module(f"swir_tracker_ros.core.{name}")
     except ImportError:
         return None
-    return fhog_jit
 
 
 def _jit() -> ModuleType | None:
-    return _jit_module() if USE_JIT else None
-
-
-@lru_cache(maxsize=1)
-def _corr_jit_module() -> ModuleType | None:
-    """core/corr_jit.py (the correlation filters' compiled loops), or None when numba is not installed."""
-    try:
-        from swir_tracker_ros.core import corr_jit
-    except ImportError:
-        return None
-    return corr_jit
+    return _compiled_module("fhog_jit") if USE_JIT else None
 
 
 def corr_jit() -> ModuleType | None:
     """The compiled correlation loops (core/corr_jit.py) when in use (numba importable and `USE_JIT`)."""
-    return _corr_jit_module() if USE_JIT else None
+    return _compiled_module("corr_jit") if USE_JIT else None
 
 
 def warm_up() -> bool:
