@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable
 
 import cv2
@@ -94,6 +95,9 @@ class Tracker:
         self._init_size = (0.0, 0.0)
         self._frame_shape: tuple[int, ...] = ()
         self._occluded = 0
+        self._clock = 0.0  # frame periods since init
+        self._ego = (0.0, 0.0)  # summed ego shifts since init
+        self._trail: deque[tuple[float, float, float]] = deque()  # (clock, x - ego x, y - ego y), tracked
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
         self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
         self._memory = False
@@ -201,6 +205,8 @@ class Tracker:
         self._predict(frames)
         kf.x[0] += dx
         kf.x[1] += dy
+        self._clock += frames
+        self._ego = (self._ego[0] + dx, self._ego[1] + dy)
         pred = model.box_from_state(kf.x)
         ih, iw = img.shape
         if not pred.is_valid() or not pred.intersects_image(iw, ih):
@@ -258,7 +264,24 @@ class Tracker:
         if failed:  # the winner may still be a window at the prediction (the normal-mode search)
             outer = not any(det is d for d in dets)
             info = self._redetection_update(z, k, det.peak, outer)
-        else:
+        rejected, learn, steer = False, False, True
+        if not failed:
+            # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
+            rejected = self._occluded > 0 and self._weak(det.peak)
+            if not rejected:
+                rejected, learn = self._memory_verdict(best)
+                steer = not rejected
+            elif p.rejected_update == "memory":
+                steer = self._memory_knows(best)
+            else:
+                steer = False
+        if not steer and p.rejected_update != "normal" and self._occluded >= p.rejected_update_after:
+            # (ours) a frame that is not `tracking` does not steer the state like a confident one
+            if p.rejected_update == "coast":
+                info = kf.update(None, threshold=k)
+            else:
+                info = self._redetection_update(z, k, det.peak, outer=False)
+        elif not failed:
             info = kf.update(z, threshold=k)
             if p.variant == "measured":
                 kf.x[:2] = z[:2]  # the confident correlation peak is the centre (no posterior lag)
@@ -268,16 +291,17 @@ class Tracker:
         if not out.is_valid():
             raise TrackerError("Kalman posterior box has a non-positive size")
         self._box = self._clamp_size(out)
-        # (ours) coming back from an occlusion takes a peak like the tracked target's, and the memory's word
-        rejected = not failed and (
-            (self._occluded > 0 and self._weak(det.peak)) or not self._verified(img, best)
-        )
+        if learn:
+            self._bank.train_memory(img, self._box, p.memory_rate)
         updated = self._maybe_train(img, det, failed or rejected)
         if failed or rejected:
+            if self._occluded == 0:
+                self._set_coast_velocity()
             self._occluded += 1
             state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
         else:
             self._occluded = 0
+            self._remember_centre()
             state = TrackState.TRACKING
             self._peak_sum += det.peak
             self._peak_n += 1
@@ -347,26 +371,56 @@ class Tracker:
         kf.x[self._centre_rates] = held
         return info
 
-    def _verified(self, img: np.ndarray, index: int) -> bool:
-        """Long-term memory check of a non-failed frame (LCT, Ma et al. CVPR 2015 Sec. 3.3; ours here).
+    def _memory_knows(self, index: int) -> bool:
+        """Does the memory find the target in window `index` (peak >= memory_ratio x its mean)? No side
+        effects; without a memory, yes."""
+        if not self._memory or not self._mem_n:
+            return True
+        return self._bank.memory_score(index) >= self.params.memory_ratio * self._mem_sum / self._mem_n
+
+    def _memory_verdict(self, index: int) -> tuple[bool, bool]:
+        """Long-term memory check of a non-failed frame (LCT, Ma et al. CVPR 2015 Sec. 3.3; ours here):
+        (rejected, learn).
 
         The memory filter (first-frame model, then learnt at `memory_rate` only from frames it scores
-        above its own mean) must find the target in the winning window with a peak of at least
-        `memory_ratio` x its mean over the verified frames; otherwise the box is on something the memory
-        does not know (background, a distractor) and the frame is `occluded`, not `tracking`.
+        above its own mean: `learn`, done on the posterior box by the caller) must find the target in the
+        winning window with a peak of at least `memory_ratio` x its mean over the verified frames;
+        otherwise the box is on something the memory does not know (background, a distractor) and the
+        frame is `occluded`, not `tracking`.
         """
-        p, bank = self.params, self._bank
+        p = self.params
         if not self._memory:
-            return True
-        m = bank.memory_score(index)
+            return False, False
+        m = self._bank.memory_score(index)
         mean = self._mem_sum / self._mem_n if self._mem_n else m
         if m < p.memory_ratio * mean:
-            return False
+            return True, False
         self._mem_sum += m
         self._mem_n += 1
-        if m >= mean and p.memory_rate > 0.0:
-            bank.train_memory(img, self._box, p.memory_rate)
-        return True
+        return False, m >= mean and p.memory_rate > 0.0
+
+    def _remember_centre(self) -> None:
+        """Append the tracked centre (ego shifts removed) to the trail of the last coast_velocity_window."""
+        n = self.params.coast_velocity_window
+        if n <= 0:
+            return
+        trail = self._trail
+        trail.append((self._clock, self._box.cx - self._ego[0], self._box.cy - self._ego[1]))
+        while trail and trail[0][0] < self._clock - n:
+            trail.popleft()
+
+    def _set_coast_velocity(self) -> None:
+        """(ours, `coast_velocity_window`) The centre velocity for re-detection: the trail's mean velocity."""
+        trail = self._trail
+        if self.params.variant != "measured" or self.params.coast_velocity_window <= 0 or len(trail) < 2:
+            return
+        (t0, x0, y0), (t1, x1, y1) = trail[0], trail[-1]
+        # over the whole window: a trail shorter than the window (a track just started) counts the rest
+        # as standing still, so a few frames' motion does not carry the prediction through an occlusion
+        span = max(t1 - t0, float(self.params.coast_velocity_window))
+        vx, vy = self._centre_rates[:2]
+        self._kf.x[vx] = (x1 - x0) / span
+        self._kf.x[vy] = (y1 - y0) / span
 
     def _redetection_score(self, pred: Box, window: Box, rings: int) -> Callable[[Detection], float]:
         """Ranking of the re-detection candidates: the peak, times a Gaussian motion prior (ours, measured).

@@ -151,6 +151,32 @@ class TrackerParams:
         0,
         100000,
     )
+    coast_velocity_window: int = _f(
+        50,
+        "(ours, variant measured) when tracking turns to re-detection, the centre velocity becomes the "
+        "mean velocity of the tracked centre over this many frames before it (ego shifts removed) instead "
+        "of the Kalman's: a target that walks on keeps its pace, one that turned on the spot or jittered "
+        "is not carried away; 0: the Kalman velocity",
+        0,
+        100000,
+    )
+    rejected_update: str = _f(
+        "memory",
+        "(ours, variant measured) Kalman update of a non-failed frame that is not accepted as `tracking` "
+        "(a weak peak after an occlusion, or the long-term memory's veto) once re-detection has lasted "
+        "rejected_update_after frames: 'normal' as a confident frame (the centre set to the peak), 'held' "
+        "as a re-detection at the prediction (robust update, motion held), 'coast' no measurement, "
+        "'memory' 'held' unless the memory finds the target in the box (then 'normal')",
+        choices=("normal", "held", "coast", "memory"),
+    )
+    rejected_update_after: int = _f(
+        25,
+        "(ours, variant measured) frames of re-detection before rejected_update applies; until then a "
+        "rejected frame steers the state like a confident one (a short loss: fast motion, a turn); a long "
+        "occlusion must not drag the prediction onto the occluder or the background",
+        0,
+        100000,
+    )
     memory_ratio: float = _f(
         0.5,
         "(ours, variant measured; LCT-style memory, Ma et al. CVPR 2015) a frame is `tracking` only when "
@@ -164,7 +190,7 @@ class TrackerParams:
         0.01, "(ours) learning rate of the memory on frames whose memory peak is above its mean", 0.0, 1.0
     )
     max_occluded_frames: int = _f(
-        150, "(ours) frames in re-detection before the state becomes lost", 1, 100000
+        250, "(ours) frames in re-detection before the state becomes lost", 1, 100000
     )
     stretch: str = _f(
         "auto",
