@@ -38,6 +38,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from swir_tracker_ros.core.fhog import fhog
+from swir_tracker_ros.core.windows import FFT_SIZES
 from swir_tracker_ros.errors import ParameterError, TrackerError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
@@ -82,8 +83,8 @@ class DSSTParams:
 
 @dataclass
 class ScaleOptions:
-    """Size estimation of a base filter: the fields every filter's Params shares (KCFParams, DCFCAParams
-    inherit them, so they are declared once)."""
+    """Size estimation and template geometry of a base filter: the fields every filter's Params shares
+    (KCFParams, DCFCAParams inherit them, so they are declared once)."""
 
     scale_estimator: str = _f(
         "search",
@@ -93,6 +94,15 @@ class ScaleOptions:
     )
     dsst: DSSTParams = field(
         default_factory=DSSTParams, metadata={"doc": "DSST scale filter (core/scale.py)"}
+    )
+    fft_sizes: str = _f(
+        "auto",
+        "template cell counts: exact ((1 + padding) x target rounded to whole cells, the papers), nearest "
+        "(ours: each moved to the nearest 2^a 3^b 5^c in ratio, fast FFT sizes; the window in the image "
+        "is unchanged, resampled up to ~10 % finer or coarser along an axis; docs/speed.md), smooth (the "
+        "next 2^a 3^b 5^c at or above) or auto: nearest for the variant measured, exact for the papers' "
+        "variants",
+        choices=FFT_SIZES,
     )
 
 
