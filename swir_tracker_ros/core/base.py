@@ -73,8 +73,8 @@ class BaseFilter(ABC):
         )
         self.padding = fp.padding
         self.learning_rate = fp.interp_factor
-        self.smooth = self.smooth_sizes(p)
-        self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale, self.smooth)
+        self.sizes = fp.fft_sizes  # template cell counts: exact or FFT-friendly (windows.template_size)
+        self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale, self.sizes)
         self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
         self.target_cells = self._target_cells(w, h, w, h)
         self.filter = self._build()
@@ -94,22 +94,12 @@ class BaseFilter(ABC):
             return "hog_gray" if p.variant == "measured" else "hog_soft"
         return kind
 
-    @classmethod
-    def smooth_sizes(cls, p: TrackerParams) -> bool | str:
-        """How the template's cell counts are made FFT-friendly (`fft_sizes`, windows.template_size):
-        False (exact), True (next 5-smooth) or "nearest"; `auto`: nearest for the variant measured (ours),
-        exact for the papers' variants (their geometry)."""
-        mode = getattr(cls.own_params(p), "fft_sizes", "exact")
-        if mode == "auto":
-            mode = "nearest" if p.variant == "measured" else "exact"
-        return {"exact": False, "smooth": True}.get(mode, mode)
-
     def _target_cells(self, w: float, h: float, tw: float, th: float) -> float:
         """The target's size sqrt(w h) in template cells (the Gaussian label's scale), for a template
         whose exact geometry is (1 + padding) x tw x th: the smooth template's stretch (its cell counts
         over the exact ones, 1 when `fft_sizes` is exact) scales the target with the window."""
         stretch = 1.0
-        if self.smooth:
+        if self.sizes != "exact":
             ew, eh = template_size(tw, th, self.padding, self.cell, self.model_scale)
             stretch = math.sqrt(self.tw * self.th / (ew * eh))
         return math.sqrt(w * h) * self.model_scale / self.cell * stretch

@@ -155,16 +155,16 @@ class BACFFilter(KCFFilter):
         fp = self.fp
         w, h = self._size
         tw, th = (math.sqrt(w * h),) * 2 if self._square else (w, h)
-        self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale, self.smooth)
+        self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale, self.sizes)
         cells = (self.tw // self.cell) * (self.th // self.cell)
         if cells > fp.max_window_cells:  # BACF filter_max_area: a coarser template, the same window
             self.model_scale *= math.sqrt(fp.max_window_cells / cells)
-            self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale, self.smooth)
+            self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale, self.sizes)
         self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
         self.target_cells = self._target_cells(w, h, tw, th)
         # the smooth template's stretch along each axis (1 when exact) scales the target's support too
         ew, eh = template_size(tw, th, self.padding, self.cell, self.model_scale)
-        kx, ky = (self.tw / ew, self.th / eh) if self.smooth else (1.0, 1.0)
+        kx, ky = (self.tw / ew, self.th / eh) if self.sizes != "exact" else (1.0, 1.0)
         support = (
             max(1, math.floor(h * self.model_scale * ky / self.cell)),
             max(1, math.floor(w * self.model_scale * kx / self.cell)),
