@@ -33,7 +33,8 @@ def test_nearest_smooth_count_is_smooth_and_nearest_in_ratio() -> None:
             if is_smooth(n, prime):
                 assert m == n
             # no smooth number is nearer in ratio
-            better = [k for k in range(4, 2 * n) if is_smooth(k, prime) and max(k / n, n / k) < max(m / n, n / m)]
+            err = max(m / n, n / m)
+            better = [k for k in range(4, 2 * n) if is_smooth(k, prime) and max(k / n, n / k) < err]
             assert not better, (n, m, better)
     assert [nearest_smooth_count(n, 7) for n in (62, 31, 59, 41, 13, 14, 21)] == [63, 32, 60, 42, 14, 14, 21]
     assert [nearest_smooth_count(n, 5) for n in (62, 31, 59, 41, 13, 14, 21)] == [64, 32, 60, 40, 12, 15, 20]

@@ -374,7 +374,10 @@ class BaseFilter(ABC):
 
     def memory_score(self, index: int) -> float:
         """Peak of the memory filter's response on window `index` of the last `detect` call."""
-        resp = self.memory.respond(self._last_features[index : index + 1])[0]
+        z = self._last_features[index : index + 1]
+        spectrum = getattr(self.filter, "spectrum", None)  # KCF: the FFT of `detect`, not a second one
+        zf = spectrum(self._last_features, index) if spectrum is not None else None
+        resp = (self.memory.respond(z) if zf is None else self.memory.respond_spectra(z, zf))[0]
         return float(resp.max()) * self.gain
 
     def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:
