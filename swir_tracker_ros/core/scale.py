@@ -97,11 +97,10 @@ class ScaleOptions:
     )
     fft_sizes: str = _f(
         "exact",
-        "template cell counts: exact ((1 + padding) x target rounded to whole cells, the papers), or "
-        "(ours, an option) smooth7 / smooth5: each moved to the nearest 2^a 3^b 5^c 7^d / 2^a 3^b 5^c in "
-        "ratio, fast FFT sizes (the window in the image is unchanged, resampled up to ~10 % finer or "
-        "coarser along an axis): FFTs ~20-40 % faster at 40x100, but real-set SRE false-tracking frames "
-        "109 -> 179 (smooth7) / 404 (smooth5), so not the default (docs/speed.md)",
+        "template cell counts: exact ((1 + padding) x target rounded to whole cells, the papers), or (ours, "
+        "an option) smooth7 / smooth5: each moved to the nearest 7- / 5-smooth number, fast FFT sizes (the "
+        "window in the image is unchanged, resampled a few per cent finer or coarser); not the default: "
+        "more false-tracking frames under SRE (docs/speed.md)",
         choices=FFT_SIZES,
     )
 
