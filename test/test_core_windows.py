@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core import base
+from swir_tracker_ros.core import base, kcf
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.params import TrackerParams
 from swir_tracker_ros.core.windows import is_smooth, nearest_smooth_count, template_size
@@ -145,3 +145,28 @@ def test_training_features_are_computed_once_a_frame_with_the_same_results(
 
     monkeypatch.setattr(base.BaseFilter, "training_features", uncached)
     assert _track(frames, box, pipeline) == cached
+
+
+def test_the_memory_and_the_filter_share_one_kcf_training_sample(
+    sequences_dir: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """KCF.sample (spectrum and eq. 6 coefficients of the new sample) runs once for both models on a frame
+    where both learn, with the results of computing it for each."""
+    frames, box, _ = _sequence(sequences_dir, "otb_jogging-1", 60)
+    calls = {"sample": 0, "train": 0}
+    sample, train = kcf.KCF.sample, kcf.KCF.train
+
+    def count_sample(self, x):
+        calls["sample"] += 1
+        return sample(self, x)
+
+    def count_train(self, x, rate, prepared=None):
+        calls["train"] += 1
+        return train(self, x, rate, prepared)
+
+    monkeypatch.setattr(kcf.KCF, "sample", count_sample)
+    monkeypatch.setattr(kcf.KCF, "train", count_train)
+    shared = _track(frames, box, "kcf")
+    assert calls["train"] - calls["sample"] > 10
+    monkeypatch.setattr(kcf.KCF, "train", lambda self, x, rate, prepared=None: train(self, x, rate))
+    assert _track(frames, box, "kcf") == shared

@@ -38,7 +38,13 @@ class KCFFilter(BaseFilter):
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
-        self.filter.train(self.training_features(img, [win])[0], rate)
+        feats = self.training_features(img, [win])
+        if isinstance(self.filter, KCF):  # the memory and the filter learn the same sample on a frame
+            if self._sample is None or self._sample[0] is not feats:
+                self._sample = (feats, self.filter.sample(feats[0]))
+            self.filter.train(feats[0], rate, self._sample[1])
+        else:
+            self.filter.train(feats[0], rate)
         self.train_scale(img, box, rate)
 
     def failed(self, det: Detection) -> bool:
@@ -46,6 +52,7 @@ class KCFFilter(BaseFilter):
 
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         super().__init__(p, w, h)
+        self._sample: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None  # (maps, KCF.sample)
         self._peak_sum = self._apce_sum = 0.0
         self._n = 0
         gate = self.fp.update_gate

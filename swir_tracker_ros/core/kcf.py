@@ -176,11 +176,17 @@ class KCF:
         chunk, step = kept[1][index // kept[2]], kept[2]
         return chunk[index % step : index % step + 1]
 
-    def train(self, x: np.ndarray, rate: float) -> None:
+    def sample(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(xf, alphaf) of the training sample x: its spectrum and the dual coefficients of eq. 6 learnt
+        from it alone (the same for every KCF of equal Params and shape: the long-term memory is one)."""
         xf = rfft2(x)
         xx = np.array([float(np.vdot(x, x))])
         kf = gaussian_correlation(xf[None], xx, xf, float(xx[0]), self.params.kernel_sigma, self.shape)[0]
-        alphaf = self.yf / (kf + self.params.lambda_)  # eq. 6
+        return xf, self.yf / (kf + self.params.lambda_)  # eq. 6
+
+    def train(self, x: np.ndarray, rate: float, sample: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        """Learn from x at learning rate `rate`; `sample`: `self.sample(x)` if already computed."""
+        xf, alphaf = self.sample(x) if sample is None else sample
         if self.model_alphaf is None or rate >= 1.0:
             self.model_x, self.model_xf, self.model_alphaf = x.copy(), xf, alphaf
         else:
