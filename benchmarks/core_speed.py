@@ -375,12 +375,18 @@ def fft_libraries() -> dict[str, float]:
     def ours() -> object:
         return kcf.irfft2(kcf.rfft2(x), shape)
 
+    def ours_at(rows: int) -> Callable[[], object]:  # the template sizes of the fft_sizes options
+        y = np.random.default_rng(2).random((5, 31, rows, 25)).astype(np.float32)
+        return lambda: kcf.irfft2(kcf.rfft2(y), (rows, 25))
+
     return {
         "scipy.fft rfft2+irfft2 (float32)": best_of(scipy_),
         "numpy.fft rfft2+irfft2 (float64)": best_of(numpy_),
         "cv2.dft per plane fwd+inv": best_of(cv2_),
         "cv2.dft DFT_ROWS batched, fwd + col inv only": best_of(cv2_rows),
         "core.kcf rfft2+irfft2 (chosen)": best_of(ours),
+        "core.kcf at 63 x 25 cells (fft_sizes: smooth7)": best_of(ours_at(63)),
+        "core.kcf at 64 x 25 cells (fft_sizes: smooth5)": best_of(ours_at(64)),
     }
 
 

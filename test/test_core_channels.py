@@ -3,9 +3,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import cv2
 import numpy as np
 import pytest
 
+from swir_tracker_ros.core import fhog as fhog_module
 from swir_tracker_ros.core.channels import cell_means, intensity_channels, intensity_histogram
 from swir_tracker_ros.core.features import extract_features, feature_shape, unwindowed_features
 from swir_tracker_ros.core.fhog import N_CHANNELS, fhog
@@ -16,6 +20,25 @@ def test_cell_means_average_whole_cells_and_drop_the_rest() -> None:
     out = cell_means(planes, 4)
     assert out.shape == (2, 1, 2, 2) and out.dtype == np.float32
     assert out[1, 0, 1, 0] == pytest.approx(planes[1, 0, 4:8, 0:4].mean())
+
+
+@pytest.mark.parametrize("cell", [1, 2, 3, 4, 5, 7, 8])
+def test_compiled_cell_means_equal_numpy_mean_bit_for_bit(
+    cell: int, sequences_dir: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The compiled block means (corr_jit.cell_means_kernel, issue 17) are numpy's `mean` exactly, on real
+    patches and on the soft histogram planes (hog_ih)."""
+    img = cv2.imread(str(sorted((sequences_dir / "otb_woman").glob("*.png"))[0]), cv2.IMREAD_GRAYSCALE)
+    patches = np.stack([img[y : y + 250, 40:141] for y in (0, 17, 33)]).astype(np.float32) / 255.0
+    for planes in (patches[:, None], intensity_histogram(patches, 8)):
+        fast = cell_means(planes, cell)
+        monkeypatch.setattr(fhog_module, "USE_JIT", False)
+        slow = cell_means(planes, cell)
+        monkeypatch.setattr(fhog_module, "USE_JIT", True)
+        assert fast.shape == slow.shape == (3, planes.shape[1], 250 // cell, 101 // cell)
+        np.testing.assert_array_equal(fast, slow)
+    if cell < 8:  # the compiled loop did run (cell 8: numpy's unrolled pairwise sum, numpy path kept)
+        assert fhog_module.corr_jit().cell_means_kernel.signatures
 
 
 def test_intensity_histogram_is_a_soft_partition_of_unity() -> None:

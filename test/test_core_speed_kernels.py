@@ -165,3 +165,33 @@ def test_gaussian_correlation_equals_the_einsum_path(recorded: dict, monkeypatch
         slow = kcf.gaussian_correlation(*args)
         monkeypatch.setattr(fhog, "USE_JIT", True)
         np.testing.assert_array_equal(fast, slow)
+
+
+def test_memory_score_reuses_the_detection_spectra_with_the_same_results(
+    recorded: dict, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`memory_score` takes the winning window's FFT from the filter's `respond` (KCF.spectrum) instead of
+    a second rfft2: equal to a fresh respond, and the whole tracker equal with the reuse switched off."""
+    for _, z, _ in recorded["respond"][:40]:
+        if len(z) > kcf._KEEP_SPECTRA:
+            continue
+        k = kcf.KCF(kcf.KCFParams(), z.shape[1:], 10.0)
+        k.train(z[0], 1.0)
+        k.respond(z)
+        kept = [k.spectrum(z, i) for i in range(len(z))]
+        assert k.spectrum(z.copy(), 0) is None  # another batch: no reuse
+        for i, zf in enumerate(kept):
+            np.testing.assert_array_equal(zf, kcf.rfft2(z[i : i + 1]))
+            np.testing.assert_array_equal(k.respond_spectra(z[i : i + 1], zf), k.respond(z[i : i + 1]))
+    hits = []
+    orig = kcf.KCF.respond_spectra
+
+    def counting(self, z, zf):
+        hits.append(zf is not None)
+        return orig(self, z, zf)
+
+    monkeypatch.setattr(kcf.KCF, "respond_spectra", counting)
+    assert _run(recorded["frames"], recorded["box"]) == recorded["results"]
+    assert sum(hits) >= 15  # the memory scored the winner from the kept spectra on the tracked frames
+    monkeypatch.setattr(kcf.KCF, "spectrum", lambda self, z, index: None)
+    assert _run(recorded["frames"], recorded["box"]) == recorded["results"]

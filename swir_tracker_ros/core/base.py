@@ -73,15 +73,17 @@ class BaseFilter(ABC):
         )
         self.padding = fp.padding
         self.learning_rate = fp.interp_factor
-        self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale)
+        self.sizes = fp.fft_sizes  # template cell counts: exact or FFT-friendly (windows.template_size)
+        self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale, self.sizes)
         self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
-        self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+        self.target_cells = self._target_cells(w, h, w, h)
         self.filter = self._build()
         self.scale_filter: ScaleFilter | None = None  # DSST option (core/scale.py), else the scale search
         if getattr(fp, "scale_estimator", "search") == "dsst":
             self.scale_filter = ScaleFilter(fp.dsst, w, h, soft=self.kind != "hog")
         self._training_memory = False
         self._scratch_buffers: dict[str, np.ndarray] = {}
+        self._train_features: tuple[np.ndarray, tuple[Box, ...], np.ndarray] | None = None
 
     @classmethod
     def feature_kind(cls, p: TrackerParams) -> str:
@@ -91,6 +93,16 @@ class BaseFilter(ABC):
         if kind == "auto":
             return "hog_gray" if p.variant == "measured" else "hog_soft"
         return kind
+
+    def _target_cells(self, w: float, h: float, tw: float, th: float) -> float:
+        """The target's size sqrt(w h) in template cells (the Gaussian label's scale), for a template
+        whose exact geometry is (1 + padding) x tw x th: the smooth template's stretch (its cell counts
+        over the exact ones, 1 when `fft_sizes` is exact) scales the target with the window."""
+        stretch = 1.0
+        if self.sizes != "exact":
+            ew, eh = template_size(tw, th, self.padding, self.cell, self.model_scale)
+            stretch = math.sqrt(self.tw * self.th / (ew * eh))
+        return math.sqrt(w * h) * self.model_scale / self.cell * stretch
 
     @classmethod
     def own_params(cls, p: TrackerParams) -> Any:
@@ -120,6 +132,7 @@ class BaseFilter(ABC):
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """First-frame training."""
         self.gain = 1.0
+        self._train_features = None
         self.train(img, box, 1.0)
 
     def calibrate_gain(self, img: np.ndarray, box: Box, reference_peak: float) -> None:
@@ -133,6 +146,19 @@ class BaseFilter(ABC):
     def features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
         """Windowed feature maps (N, C, rows, cols) of the image regions `windows`."""
         return extract_features(sample_patches(img, windows, self.tw, self.th), self.kind, self.cell)
+
+    def training_features(self, img: np.ndarray, windows: Sequence[Box]) -> np.ndarray:
+        """`features` of training windows, computed once per frame for both models: the long-term memory
+        (`train_memory`) and the filter train on the same box of the same frame (LCT style), so the
+        second call returns the first one's maps (read-only for the filters' `train`). The reuse is
+        forgotten at every detection, i.e. on every new frame (a reused frame buffer is never mistaken)."""
+        key = tuple(windows)
+        cached = self._train_features
+        if cached is not None and cached[0] is img and cached[1] == key:
+            return cached[2]
+        feats = self.features(img, windows)
+        self._train_features = (img, key, feats)
+        return feats
 
     def grid_geometry(self, window: Box, overlap: float) -> tuple[int, int, list[Box]]:
         """3x3 re-detection grid around `window` with centre steps snapped to whole template cells.
@@ -218,6 +244,7 @@ class BaseFilter(ABC):
     ) -> tuple[list[Detection], list[Box]]:
         """Detections in the 3x3 re-detection grid around `window` (the centre one left out if asked,
         as normal mode already correlated it) and the 9 grid windows; `scale` is copied to each."""
+        self._train_features = None
         keep = [k for k in range(9) if not (skip_centre and k == 4)]
         buf = self._scratch("grid features", (len(keep), *self.shape))  # consumed by `respond` below
         feats, wins = self.grid_features(img, window, overlap, keep, out=buf)
@@ -245,6 +272,7 @@ class BaseFilter(ABC):
         (translation) and the scale filter, centred on its peak, gives the size factor: every entry of
         the returned list is that one detection (same object), so callers indexing by window still work.
         """
+        self._train_features = None  # a new frame (training_features)
         if self.scale_filter is not None and len(windows) > 1:
             return self._detect_dsst(img, windows, scales)
         feats = self.features(img, windows)
@@ -296,6 +324,7 @@ class BaseFilter(ABC):
         point within a sixth of a window of some centre. One feature computation on the union of the
         windows (kept inside the image); each window's map is a slice of it.
         """
+        self._train_features = None
         ih, iw = img.shape[:2]
         sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih))
         if not wins:
@@ -345,7 +374,10 @@ class BaseFilter(ABC):
 
     def memory_score(self, index: int) -> float:
         """Peak of the memory filter's response on window `index` of the last `detect` call."""
-        resp = self.memory.respond(self._last_features[index : index + 1])[0]
+        z = self._last_features[index : index + 1]
+        spectrum = getattr(self.filter, "spectrum", None)  # KCF: the FFT of `detect`, not a second one
+        zf = spectrum(self._last_features, index) if spectrum is not None else None
+        resp = (self.memory.respond(z) if zf is None else self.memory.respond_spectra(z, zf))[0]
         return float(resp.max()) * self.gain
 
     def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:

@@ -80,3 +80,32 @@ def stretch_kernel(src: np.ndarray, lo: np.float32, scale: np.float32, out: np.n
             elif v > one:
                 v = one
             out[y, x] = v
+
+
+@njit(cache=True, nogil=True)
+def cell_means_kernel(planes: np.ndarray, cell: int, out: np.ndarray) -> None:
+    """Means of `cell` x `cell` blocks: planes (N, K, H, W) float32 -> out (N, K, H // cell, W // cell).
+
+    numpy's `mean(axis=(3, 5), dtype=float32)` of the (N, K, hc, cell, wc, cell) view (channels.cell_means)
+    sums, for each block, each pixel row's `cell` values from 0 (its contiguous inner reduction; plain
+    left-to-right for fewer than 8 values) and adds the row sums in row order, then divides by the count:
+    the same float32 operations here, for cell < 8 (8 and more: numpy's unrolled pairwise sum, not used).
+    """
+    n, k, _, _ = planes.shape
+    hc, wc = out.shape[2], out.shape[3]
+    count = np.float32(cell * cell)
+    zero = np.float32(0.0)
+    for i in range(n):
+        for c in range(k):
+            src = planes[i, c]
+            dst = out[i, c]
+            for y in range(hc):
+                for x in range(wc):
+                    s = zero
+                    for r in range(cell):
+                        row = src[y * cell + r]
+                        t = zero
+                        for q in range(cell):
+                            t += row[x * cell + q]
+                        s += t
+                    dst[y, x] = s / count

@@ -10,8 +10,7 @@ order as the numpy code it replaces (test/fhog_reference.py), so the features ar
 - every constant is cast to float32 where the numpy code had a float32 scalar (a bare Python float would
   promote the arithmetic to float64 in numba);
 - the float64 histogram sums keep the reference's order: per accumulator entry, the 4 passes (lower /
-  upper orientation bin x left / right cell) in turn, pixels in row order within each pass (a run of
-  pixels hitting the same entry is summed in a register, the same additions in the same order);
+  upper orientation bin x left / right cell) in turn, pixels in row order within each pass;
 - the row pooling and the normalisation keep the numpy passes' order per output element.
 
 Compiled on first use and cached on disk (`cache=True`: the package's __pycache__, or numba's user-wide
@@ -82,21 +81,14 @@ def cell_histograms_kernel(
         acc[:] = 0.0
         # the reference's passes in its order (lower bin x left / right cell, then the upper bin; hard
         # bins: the upper bin's weights are +0.0 and change no sum); a weight is the float32 product,
-        # summed in float64. A run of pixels feeding the same entry is summed in a register: the same
-        # additions in the same order, without a store and reload per pixel.
+        # summed in float64. Branch-free: one load-add-store per pixel (the earlier version summed a run
+        # of pixels feeding the same entry in a register, the same additions, but its run test was
+        # mispredicted on textured patches: 1.47 -> 1.01 ms for 5 windows of 248 x 100 px).
         for q in range(4 if soft else 2):
             xs, wx = (x0, wx0) if q % 2 == 0 else (x1, wx1)
             ob, mm = (ob0, m0) if q < 2 else (ob1, m1)
-            e = xs[0] * N_BINS + ob[0]
-            s = acc[e]
             for x in range(w):
-                e_x = xs[x] * N_BINS + ob[x]
-                if e_x != e:
-                    acc[e] = s
-                    e = e_x
-                    s = acc[e]
-                s += np.float64(mm[x] * wx[x])
-            acc[e] = s
+                acc[xs[x] * N_BINS + ob[x]] += np.float64(mm[x] * wx[x])
         for j in range(k):
             hx[row, j] = np.float32(acc[j])
     for i in range(n):  # bilinear pooling of pixel rows into cell rows (fhog._pool_rows' order)

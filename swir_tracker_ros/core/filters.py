@@ -38,7 +38,13 @@ class KCFFilter(BaseFilter):
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
-        self.filter.train(self.features(img, [win])[0], rate)
+        feats = self.training_features(img, [win])
+        if isinstance(self.filter, KCF):  # the memory and the filter learn the same sample on a frame
+            if self._sample is None or self._sample[0] is not feats:
+                self._sample = (feats, self.filter.sample(feats[0]))
+            self.filter.train(feats[0], rate, self._sample[1])
+        else:
+            self.filter.train(feats[0], rate)
         self.train_scale(img, box, rate)
 
     def failed(self, det: Detection) -> bool:
@@ -46,6 +52,7 @@ class KCFFilter(BaseFilter):
 
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         super().__init__(p, w, h)
+        self._sample: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None  # (maps, KCF.sample)
         self._peak_sum = self._apce_sum = 0.0
         self._n = 0
         gate = self.fp.update_gate
@@ -101,7 +108,7 @@ class DCFCAFilter(BaseFilter):
         """Learn from the window around `box` plus 4 context windows one target size away."""
         win = search_window(box.cx, box.cy, box.w, box.h, self.padding)
         offs = context_offsets(box.w, box.h, self.fp.n_context)
-        feats = self.features(img, [win, *(win.shifted(dx, dy) for dx, dy in offs)])
+        feats = self.training_features(img, [win, *(win.shifted(dx, dy) for dx, dy in offs)])
         self.filter.train(feats[0], feats[1:], rate)
         self.train_scale(img, box, rate)
 
@@ -155,16 +162,19 @@ class BACFFilter(KCFFilter):
         fp = self.fp
         w, h = self._size
         tw, th = (math.sqrt(w * h),) * 2 if self._square else (w, h)
-        self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale)
+        self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale, self.sizes)
         cells = (self.tw // self.cell) * (self.th // self.cell)
         if cells > fp.max_window_cells:  # BACF filter_max_area: a coarser template, the same window
             self.model_scale *= math.sqrt(fp.max_window_cells / cells)
-            self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale)
+            self.tw, self.th = template_size(tw, th, self.padding, self.cell, self.model_scale, self.sizes)
         self.shape = feature_shape(self.kind, self.th, self.tw, self.cell)
-        self.target_cells = math.sqrt(w * h) * self.model_scale / self.cell
+        self.target_cells = self._target_cells(w, h, tw, th)
+        # the smooth template's stretch along each axis (1 when exact) scales the target's support too
+        ew, eh = template_size(tw, th, self.padding, self.cell, self.model_scale)
+        kx, ky = (self.tw / ew, self.th / eh) if self.sizes != "exact" else (1.0, 1.0)
         support = (
-            max(1, math.floor(h * self.model_scale / self.cell)),
-            max(1, math.floor(w * self.model_scale / self.cell)),
+            max(1, math.floor(h * self.model_scale * ky / self.cell)),
+            max(1, math.floor(w * self.model_scale * kx / self.cell)),
         )
         return BACF(fp, self.shape, self.target_cells, support)
 

@@ -114,18 +114,28 @@ def _kernel_spectrum(
 _CHUNK_BYTES = 1 << 20  # spectra of this many bytes a chunk stay in a core's L2 cache (512 KB-1 MB)
 
 
-def _chunked_cross_spectrum(z: np.ndarray, xf: np.ndarray, cross_spectrum_kernel: Callable) -> np.ndarray:
+_KEEP_SPECTRA = 9  # `KCF.respond` keeps the spectra of batches up to this size (normal mode: 1-5 windows)
+
+
+def _chunked_cross_spectrum(
+    z: np.ndarray, xf: np.ndarray, cross_spectrum_kernel: Callable, keep: bool = False
+) -> tuple[np.ndarray, list[np.ndarray]]:
     """sum_c rfft2(z)[:, c] * conj(xf[c]) with the FFTs done a few windows at a time and each chunk's
     spectra consumed by the compiled channel sum while they are still in cache (no 8 MB spectrum array
     for a 41-window lattice). The same numbers as the einsum over the whole batch: each plane's FFT is
-    independent of the batch it is computed in, and the kernel sums the channels in the einsum's order."""
+    independent of the batch it is computed in, and the kernel sums the channels in the einsum's order.
+    Also returns the chunks' spectra when `keep` (else an empty list)."""
     n, c, rows, cols = z.shape
     k = cols // 2 + 1
     cross = np.empty((n, rows, k), dtype=np.complex64)
     step = max(1, _CHUNK_BYTES // (c * rows * k * 8))
+    chunks = []
     for i in range(0, n, step):
-        cross_spectrum_kernel(rfft2(z[i : i + step]), xf, cross[i : i + step])
-    return cross
+        zf = rfft2(z[i : i + step])
+        cross_spectrum_kernel(zf, xf, cross[i : i + step])
+        if keep:
+            chunks.append(zf)
+    return cross, chunks
 
 
 def linear_correlation(zf: np.ndarray, xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -150,16 +160,33 @@ class KCF:
         self.model_x: np.ndarray | None = None
         self.model_xf: np.ndarray | None = None
         self.model_alphaf: np.ndarray | None = None
+        self._spectra: tuple[np.ndarray, list[np.ndarray], int] | None = None  # last batch, its FFT chunks
 
     @property
     def trained(self) -> bool:
         return self.model_alphaf is not None
 
-    def train(self, x: np.ndarray, rate: float) -> None:
+    def spectrum(self, z: np.ndarray, index: int) -> np.ndarray | None:
+        """rfft2 of window `index` of the batch `z` (1, C, rows, cols//2+1) if `z` is the batch of the last
+        `respond` call and its spectra were kept (compiled path, at most `_KEEP_SPECTRA` windows); else
+        None. Lets the long-term memory score the winning window without a second FFT (BaseFilter)."""
+        kept = self._spectra
+        if kept is None or kept[0] is not z:
+            return None
+        chunk, step = kept[1][index // kept[2]], kept[2]
+        return chunk[index % step : index % step + 1]
+
+    def sample(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(xf, alphaf) of the training sample x: its spectrum and the dual coefficients of eq. 6 learnt
+        from it alone (the same for every KCF of equal Params and shape: the long-term memory is one)."""
         xf = rfft2(x)
         xx = np.array([float(np.vdot(x, x))])
         kf = gaussian_correlation(xf[None], xx, xf, float(xx[0]), self.params.kernel_sigma, self.shape)[0]
-        alphaf = self.yf / (kf + self.params.lambda_)  # eq. 6
+        return xf, self.yf / (kf + self.params.lambda_)  # eq. 6
+
+    def train(self, x: np.ndarray, rate: float, sample: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        """Learn from x at learning rate `rate`; `sample`: `self.sample(x)` if already computed."""
+        xf, alphaf = self.sample(x) if sample is None else sample
         if self.model_alphaf is None or rate >= 1.0:
             self.model_x, self.model_xf, self.model_alphaf = x.copy(), xf, alphaf
         else:
@@ -170,6 +197,13 @@ class KCF:
     def respond(self, z: np.ndarray) -> np.ndarray:
         if self.model_alphaf is None:
             raise TrackerError("KCF.respond called before train")
+        return self.respond_spectra(z, None)
+
+    def respond_spectra(self, z: np.ndarray, zf: np.ndarray | None) -> np.ndarray:
+        """`respond` of the batch z whose spectra rfft2(z) are `zf` (None: computed here, chunk by chunk;
+        the spectra of batches up to `_KEEP_SPECTRA` windows are then kept for `spectrum`)."""
+        if self.model_alphaf is None:
+            raise TrackerError("KCF.respond called before train")
         zz = np.einsum("nchw,nchw->n", z, z)
         xx = float(np.vdot(self.model_x, self.model_x))
         sigma = self.params.kernel_sigma
@@ -177,9 +211,17 @@ class KCF:
         if cj is not None and z.dtype == np.float32 and self.model_xf.dtype == np.complex64:
             # gaussian_correlation's numbers, its FFT and channel sum fused chunk by chunk (core/corr_jit.py)
             xf = np.ascontiguousarray(self.model_xf)
-            cross = _chunked_cross_spectrum(np.ascontiguousarray(z), xf, cj.cross_spectrum_kernel)
+            if zf is None:
+                keep = len(z) <= _KEEP_SPECTRA
+                zc = np.ascontiguousarray(z)
+                cross, chunks = _chunked_cross_spectrum(zc, xf, cj.cross_spectrum_kernel, keep)
+                self._spectra = (z, chunks, len(chunks[0])) if keep and chunks else None
+            else:
+                cross = np.empty((zf.shape[0], *zf.shape[2:]), dtype=np.complex64)
+                cj.cross_spectrum_kernel(np.ascontiguousarray(zf), xf, cross)
             numel = z.shape[1] * self.shape[0] * self.shape[1]
             kzf = _kernel_spectrum(cross, zz, xx, sigma, self.shape, numel)
         else:
-            kzf = gaussian_correlation(rfft2(z), zz, self.model_xf, xx, sigma, self.shape)
+            zf = rfft2(z) if zf is None else zf
+            kzf = gaussian_correlation(zf, zz, self.model_xf, xx, sigma, self.shape)
         return irfft2(self.model_alphaf[None] * kzf, self.shape)  # eq. 8

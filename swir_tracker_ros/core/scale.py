@@ -38,6 +38,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from swir_tracker_ros.core.fhog import fhog
+from swir_tracker_ros.core.windows import FFT_SIZES
 from swir_tracker_ros.errors import ParameterError, TrackerError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
@@ -82,8 +83,8 @@ class DSSTParams:
 
 @dataclass
 class ScaleOptions:
-    """Size estimation of a base filter: the fields every filter's Params shares (KCFParams, DCFCAParams
-    inherit them, so they are declared once)."""
+    """Size estimation and template geometry of a base filter: the fields every filter's Params shares
+    (KCFParams, DCFCAParams inherit them, so they are declared once)."""
 
     scale_estimator: str = _f(
         "search",
@@ -93,6 +94,14 @@ class ScaleOptions:
     )
     dsst: DSSTParams = field(
         default_factory=DSSTParams, metadata={"doc": "DSST scale filter (core/scale.py)"}
+    )
+    fft_sizes: str = _f(
+        "exact",
+        "template cell counts: exact ((1 + padding) x target rounded to whole cells, the papers), or (ours, "
+        "an option) smooth7 / smooth5: each moved to the nearest 7- / 5-smooth number, fast FFT sizes (the "
+        "window in the image is unchanged, resampled a few per cent finer or coarser); not the default: "
+        "more false-tracking frames under SRE (docs/speed.md)",
+        choices=FFT_SIZES,
     )
 
 
