@@ -264,18 +264,13 @@ class Tracker:
         if failed:  # the winner may still be a window at the prediction (the normal-mode search)
             outer = not any(det is d for d in dets)
             info = self._redetection_update(z, k, det.peak, outer)
-        rejected, learn, steer = False, False, True
+        rejected, learn, weak = False, False, False
         if not failed:
             # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
-            rejected = self._occluded > 0 and self._weak(det.peak)
+            weak = rejected = self._occluded > 0 and self._weak(det.peak)
             if not rejected:
                 rejected, learn = self._memory_verdict(best)
-                steer = not rejected
-            elif p.rejected_update == "memory":
-                steer = self._memory_knows(best)
-            else:
-                steer = False
-        if not steer and p.rejected_update != "normal" and self._occluded >= p.rejected_update_after:
+        if rejected and self._rejected_held(weak, best):
             # (ours) a frame that is not `tracking` does not steer the state like a confident one
             if p.rejected_update == "coast":
                 info = kf.update(None, threshold=k)
@@ -370,6 +365,15 @@ class Tracker:
         info = kf.update(z, threshold=k)
         kf.x[self._centre_rates] = held
         return info
+
+    def _rejected_held(self, weak: bool, index: int) -> bool:
+        """(ours, `rejected_update`) Is a rejected frame (`weak`: its peak, else the memory's veto) kept from
+        steering the state like a confident one? Only after `rejected_update_after` frames of re-detection;
+        mode 'memory' lets a weak peak in window `index` steer when the memory finds the target there."""
+        p = self.params
+        if p.rejected_update == "normal" or self._occluded < p.rejected_update_after:
+            return False
+        return not (p.rejected_update == "memory" and weak and self._memory_knows(index))
 
     def _memory_knows(self, index: int) -> bool:
         """Does the memory find the target in window `index` (peak >= memory_ratio x its mean)? No side
