@@ -195,8 +195,6 @@ class KCF:
             self.model_alphaf = (1.0 - rate) * self.model_alphaf + rate * alphaf
 
     def respond(self, z: np.ndarray) -> np.ndarray:
-        if self.model_alphaf is None:
-            raise TrackerError("KCF.respond called before train")
         return self.respond_spectra(z, None)
 
     def respond_spectra(self, z: np.ndarray, zf: np.ndarray | None) -> np.ndarray:
