@@ -9,8 +9,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from swir_tracker_ros.harness.metrics import false_tracking, occlusion_episodes, occlusions_survived
-from swir_tracker_ros.scene.scenarios import make_scenario
+from swir_tracker_ros.harness.evaluate import run_source
+from swir_tracker_ros.harness.metrics import occlusion_episodes
+from swir_tracker_ros.harness.protocol import RunStats
+from swir_tracker_ros.harness.sources import open_source
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackState
 
@@ -124,21 +126,10 @@ def test_a_long_occlusion_is_searched_until_the_target_shows_again() -> None:
     """Synthetic t3 (paper 000 Table 1 row 3): the walker is hidden behind a wall for 6.7 s (167 frames) and
     stops there for 2 s. With `max_occluded_frames` 150 the track was declared `lost` (terminal) 15 frames
     before the walker showed again; the default keeps re-detecting for 10 s and re-acquires it."""
-    run = make_scenario("t3_long_full_dynamics")
-    bits = run.world.sensor.bits
-    trk = Tracker(TrackerParams())
-    states, boxes, gts, occl = [], [], [], []
-    for fr in run:
-        gt = fr.target.box if fr.target is not None else None
-        if fr.index == 0:
-            trk.init(fr.image, gt, bit_depth=bits)
-            continue
-        res = trk.update(fr.image, bit_depth=bits)
-        states.append(res.state.value)
-        boxes.append(res.box)
-        gts.append(gt)
-        occl.append(fr.target.occlusion if fr.target is not None else None)
-    episodes = occlusion_episodes(occl, run.fps)
+    src = open_source("synth:t3_long_full_dynamics")
+    run = run_source(src, lambda: Tracker(TrackerParams()))
+    episodes = occlusion_episodes(run.occlusion, src.fps)
     assert max(b - a + 1 for a, b in episodes) > 150, episodes  # longer than the old limit
-    assert occlusions_survived(episodes, states, boxes, gts, run.fps) == len(episodes), episodes
-    assert false_tracking(states, boxes, gts) == 0
+    stats = RunStats.of(run, src.fps)
+    assert stats.occlusions == len(episodes) and stats.survived == stats.occlusions, stats
+    assert stats.false_tracking == 0, stats
