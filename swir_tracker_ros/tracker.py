@@ -406,7 +406,7 @@ class Tracker:
     def _remember_centre(self) -> None:
         """Append the tracked centre (ego shifts removed) to the trail of the last coast_velocity_window."""
         n = self.params.coast_velocity_window
-        if n <= 0:
+        if n <= 0 or self.params.variant != "measured":  # only `_set_coast_velocity` reads the trail
             return
         trail = self._trail
         trail.append((self._clock, self._box.cx - self._ego[0], self._box.cy - self._ego[1]))
