@@ -214,7 +214,7 @@ class Tracker:
             self._box = pred if pred.is_finite() else self._box
             return self._result(self._box, TrackState.LOST)
         pred = self._clamp_size(pred)
-        factors = p.scale_factors()
+        factors = self._scale_factors()
         wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
         dets = bank.detect(img, wins, factors)
         mid = len(dets) // 2
@@ -330,6 +330,22 @@ class Tracker:
             kf.predict()
         finally:
             kf.F, kf.Q = F1, Q1
+
+    def _scale_factors(self) -> tuple[float, ...]:
+        """Sizes searched at the prediction: `scale_factors`, and while re-detecting (variant measured, the
+        scale search) 1 / redetect_scales and redetect_scales at either end (ours).
+
+        A target that turns or is partly hidden is no longer recognised at its size, and the 5-scale
+        search (+-10 %, each step penalised) lets the size drift down with the weaker peaks: on OTB girl
+        the box shrank to half the girl while she turned away, and a filter correlating a window of that
+        size never found her again. The two wide windows let one re-detection frame recover 20 %.
+        """
+        p = self.params
+        factors = p.scale_factors()
+        wide = p.redetect_scales > 0.0 and p.variant == "measured" and len(factors) > 1
+        if wide and self._occluded > 0 and self._bank.scale_filter is None:
+            factors = (1.0 / p.redetect_scales, *factors, p.redetect_scales)
+        return factors
 
     def _redetection_update(self, z: np.ndarray, k: float | None, peak: float, outer: bool) -> UpdateInfo:
         """Kalman update while re-detecting: the motion is held, outliers cannot steer it (ours).

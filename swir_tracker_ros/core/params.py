@@ -143,6 +143,15 @@ class TrackerParams:
         "redetect_peak_ratio x the tracked mean) keeps the lattice search going instead of steering the "
         "filter as a normal-mode measurement",
     )
+    redetect_scales: float = _f(
+        1.2,
+        "(ours, variant measured) while re-detecting, the scale search at the prediction gets two more "
+        "windows, at this factor and its inverse times the predicted size (penalised by scale_penalty as "
+        "the next scale steps): a size that shrank while the target was not recognised (a turn, a partial "
+        "occlusion) can grow back; 0: off (the n_scales search only)",
+        0.0,
+        3.0,
+    )
     coast_frames: int = _f(
         0,
         "(ours, variant measured) frames of re-detection after which the centre velocity is set to zero: "
