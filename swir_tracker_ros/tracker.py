@@ -485,10 +485,17 @@ class Tracker:
         return self._bank.threshold_map(peak)
 
     def _maybe_train(self, img: np.ndarray, det: Detection, failed: bool) -> bool:
-        """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure."""
-        if failed or not self._bank.confident(det):
+        """Confident-only update (peak > 0.5, paper 000; APCE > 0.583 x mean, eq. 4.97); frozen on failure.
+        (ours, `unconfident_rate` > 0) a tracked frame the gate refuses learns at that fraction of it."""
+        if failed:
             return False
-        self._bank.train(img, self._box, self._bank.learning_rate)
+        rate = self._bank.learning_rate
+        if not self._bank.confident(det):
+            p = self.params
+            if p.unconfident_rate <= 0.0 or p.variant != "measured":
+                return False
+            rate *= p.unconfident_rate
+        self._bank.train(img, self._box, rate)
         return True
 
     def _clamp_size(self, box: Box) -> Box:

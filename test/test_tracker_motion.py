@@ -150,3 +150,20 @@ def test_a_size_that_shrank_while_the_target_turned_grows_back(sequences_dir: Pa
 
     off, on = stats(0.0), stats(1.2)
     assert off.success_auc < 0.25 and on.success_auc > 0.5, (off, on)
+
+
+def test_a_gate_that_nothing_passes_freezes_the_model_unless_unconfident_frames_teach_it(
+    sequences_dir: Path,
+) -> None:
+    """OTB skating1 (stage lighting): after the first 10 frames no peak reaches the LMCF gate's bar (0.7 x the
+    mean peak of the updated frames, set by the bright first frames), the filter is never updated again and
+    the skater is lost (measured: 9 updates, AUC 0.232). With `unconfident_rate` 0.2 the tracked frames the
+    gate refuses still teach the filter at a fifth of its rate and the skater is kept (measured: AUC 0.659).
+    Off by default: the same updates learn a partial occluder (synthetic x_low_contrast_interlaced lost)."""
+    src = open_source(sequences_dir / "otb_skating1")
+
+    def run(rate: float) -> RunStats:
+        return RunStats.of(run_source(src, lambda: Tracker(TrackerParams(unconfident_rate=rate))), src.fps)
+
+    frozen, taught = run(0.0), run(0.2)
+    assert frozen.success_auc < 0.3 and taught.success_auc > 0.5, (frozen, taught)
