@@ -100,6 +100,7 @@ class Tracker:
         self._trail: deque[tuple[float, float, float]] = deque()  # (clock, x - ego x, y - ego y), tracked
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
         self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
+        self._refused = 0  # tracked frames in a row that the update gate refused (unconfident_after)
         self._memory = False
         self._lattice = False
 
@@ -492,9 +493,12 @@ class Tracker:
         rate = self._bank.learning_rate
         if not self._bank.confident(det):
             p = self.params
-            if p.unconfident_rate <= 0.0 or p.variant != "measured":
+            self._refused += 1
+            if p.unconfident_rate <= 0.0 or p.variant != "measured" or self._refused <= p.unconfident_after:
                 return False
             rate *= p.unconfident_rate
+        else:
+            self._refused = 0
         self._bank.train(img, self._box, rate)
         return True
 

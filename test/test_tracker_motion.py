@@ -157,9 +157,9 @@ def test_a_gate_that_nothing_passes_freezes_the_model_unless_unconfident_frames_
 ) -> None:
     """OTB skating1 (stage lighting): after the first 10 frames no peak reaches the LMCF gate's bar (0.7 x the
     mean peak of the updated frames, set by the bright first frames), the filter is never updated again and
-    the skater is lost (measured: 9 updates, AUC 0.232). With `unconfident_rate` 0.2 the tracked frames the
-    gate refuses still teach the filter at a fifth of its rate and the skater is kept (measured: AUC 0.659).
-    Off by default: the same updates learn a partial occluder (synthetic x_low_contrast_interlaced lost)."""
+    the skater is lost (measured: 9 updates, AUC 0.232). With `unconfident_rate` 0.2 (the default), once the
+    gate has refused `unconfident_after` (10) tracked frames, a refused tracked frame still teaches the filter
+    at a fifth of its rate and the skater is kept (measured: AUC 0.589)."""
     src = open_source(sequences_dir / "otb_skating1")
 
     def run(rate: float) -> RunStats:

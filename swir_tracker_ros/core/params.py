@@ -196,15 +196,22 @@ class TrackerParams:
         2.0,
     )
     unconfident_rate: float = _f(
-        0.0,
-        "(ours, variant measured) a `tracking` frame that the update gate does not pass (its peak or APCE "
-        "below the gate's bar) still teaches the filter at this fraction of its learning rate: the model "
-        "follows slow appearance changes (stage lighting, a turn) that keep every peak under the bar set by "
-        "the first frames, but also learns a partial occluder (measured 0.2: real SRE AUC +0.005, false "
-        "tracking 128 -> 17; synthetic 0.732 -> 0.686, one occlusion lost); 0: frozen until a frame passes "
-        "the gate (the papers)",
+        0.2,
+        "(ours, variant measured) once the update gate has refused unconfident_after tracked frames since it "
+        "last passed one, a refused `tracking` frame still teaches the filter at this fraction of its "
+        "learning rate: the model follows a lasting appearance change (stage lighting, a turn) that keeps "
+        "every peak under the bar the first frames set (LMCF's means never come down); 0: frozen until a "
+        "frame passes the gate (the papers)",
         0.0,
         1.0,
+    )
+    unconfident_after: int = _f(
+        10,
+        "(ours, variant measured) tracked frames the update gate must refuse (since it last passed one) "
+        "before unconfident_rate applies: from the first refused frame, the tracked frames of a partial "
+        "occlusion taught the filter the occluder (synthetic x_low_contrast_interlaced lost)",
+        0,
+        100000,
     )
     memory_rate: float = _f(
         0.01, "(ours) learning rate of the memory on frames whose memory peak is above its mean", 0.0, 1.0
