@@ -100,7 +100,7 @@ class Tracker:
         self._trail: deque[tuple[float, float, float]] = deque()  # (clock, x - ego x, y - ego y), tracked
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
         self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
-        self._refused = 0  # tracked frames in a row that the update gate refused (unconfident_after)
+        self._refused = 0  # tracked frames the update gate refused since it last passed one
         self._memory = False
         self._lattice = False
 
