@@ -241,7 +241,8 @@ class Tracker:
             # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
             rings = self._rings() if self._lattice else 0
             if self._lattice:
-                cand, grid = bank.detect_lattice(img, wins[mid], p.lattice_step, rings)
+                half = (p.lattice_alternate, self._occluded % 2) if p.lattice_alternate > 0 else None
+                cand, grid = bank.detect_lattice(img, wins[mid], p.lattice_step, rings, half=half)
                 grid = [wins[mid], *grid]
             else:
                 cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)

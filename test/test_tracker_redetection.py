@@ -108,3 +108,64 @@ def test_lattice_leaves_out_windows_centred_outside_the_image() -> None:
     assert (0, 0) not in offsets
     assert all(0.0 <= w.cx < 320 and 0.0 <= w.cy < 240 for w in wins)
     assert len(wins) == 8  # the quarter of the 5x5 lattice to the right of and below the corner
+
+
+def test_lattice_checkerboard_halves_cover_the_outer_rings_on_alternate_frames() -> None:
+    """`lattice_alternate` 2: ring 1 in both halves, rings 2-3 split into two disjoint checkerboards."""
+    bank = make_filter(TrackerParams(), 20.0, 40.0)
+    win = search_window(400.0, 400.0, 20.0, 40.0, bank.padding)
+    full = bank.lattice_geometry(win, 0.35, 3)[2]
+    halves = [bank.lattice_geometry(win, 0.35, 3, half=(2, parity))[2] for parity in (0, 1)]
+    inner = {o for o in full if max(abs(o[0]), abs(o[1])) <= 1}
+    assert inner <= set(halves[0]) and inner <= set(halves[1])
+    assert (set(halves[0]) - inner).isdisjoint(set(halves[1]) - inner)
+    assert set(halves[0]) | set(halves[1]) == set(full)
+    assert len(halves[0]) + len(halves[1]) == len(full) + len(inner)  # 28 + 28 = 48 + 8
+
+
+def test_a_target_two_lattice_steps_away_is_found_by_the_half_that_holds_its_window() -> None:
+    """The pedestrian sits under the ring-2 window (2, 0) of a lattice around a displaced window: the half
+    with that window finds it at a peak like the centred one's, the other half's nearest windows are a
+    whole lattice step off it (a frame later the first half is searched again)."""
+    built = build_scene("demo", 1)
+    img, truths = built.world.render(0.0, CameraView(0.0, 0.0, 8.0))
+    box = next(tr for tr in truths if tr.id == built.target_id).box
+    img = img.astype("float32") / 65535.0
+    p = TrackerParams()
+    bank = make_filter(p, box.w, box.h)
+    bank.initialise(img, box)
+    centred = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
+    at = bank.detect(img, [centred])[0].peak
+    sx = bank.lattice_geometry(centred, p.lattice_step, 2)[0]
+    off = centred.shifted(-2 * sx * bank.cell * centred.w / bank.tw, 0.0)
+    found = [max(bank.detect_lattice(img, off, p.lattice_step, 2, half=(2, k))[0], key=lambda d: d.peak)
+             for k in (0, 1)]
+    assert found[0].peak > 0.9 * at
+    assert abs(found[0].cx - box.cx) < 0.1 * box.w
+    assert found[1].peak < found[0].peak
+
+
+@pytest.mark.parametrize("steps", [(1, 0), (-2, 1), (3, -2)])
+def test_the_principal_channel_screen_keeps_the_full_lattice_winner(steps: tuple[int, int]) -> None:
+    """`lattice_channels` 8: the lattice is screened on 8 of the 32 channels and its 3 best windows are
+    correlated in full. The pedestrian under lattice window `steps` of a displaced search: the screened
+    lattice returns the full lattice's best detection, the same numbers (it was correlated in full)."""
+    built = build_scene("demo", 2)
+    img, truths = built.world.render(0.0, CameraView(0.0, 0.0, 8.0))
+    box = next(tr for tr in truths if tr.id == built.target_id).box
+    img = img.astype("float32") / 65535.0
+    full_bank = make_filter(TrackerParams(), box.w, box.h)
+    screened = make_filter(TrackerParams(lattice_channels=8), box.w, box.h)
+    centred = search_window(box.cx, box.cy, box.w, box.h, full_bank.padding)
+    best = []
+    for bank in (full_bank, screened):
+        bank.initialise(img, box)
+        sx, sy = bank.lattice_geometry(centred, 0.35, 3)[:2]
+        k = bank.cell * centred.w / bank.tw
+        off = centred.shifted(-steps[0] * sx * k, -steps[1] * sy * bank.cell * centred.h / bank.th)
+        dets, wins = bank.detect_lattice(img, off, 0.35, 3)
+        best.append(max(dets, key=lambda d: d.peak))
+    assert len(dets) == 3 < len(wins)
+    assert best[1] == best[0]
+    assert abs(best[0].cx - box.cx) < 0.1 * box.w
+

@@ -34,6 +34,8 @@ from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.kalman import BoxModel, ThresholdMap
 from swir_tracker_ros.types import Box
 
+LATTICE_RESCORED = 3  # lattice windows correlated in full after the screen on principal channels (ours)
+
 
 @dataclass(frozen=True)
 class Detection:
@@ -72,6 +74,7 @@ class BaseFilter(ABC):
             0.5 if p.large_target_halving > 0 and math.sqrt(w * h) >= p.large_target_halving else 1.0
         )
         self.padding = fp.padding
+        self.lattice_channels = p.lattice_channels
         self.learning_rate = fp.interp_factor
         self.sizes = fp.fft_sizes  # template cell counts: exact or FFT-friendly (windows.template_size)
         self.tw, self.th = template_size(w, h, self.padding, self.cell, self.model_scale, self.sizes)
@@ -211,6 +214,13 @@ class BaseFilter(ABC):
         the windows with i in [bounds[0], bounds[1]] and j in [bounds[2], bounds[3]] (the windows sit on
         whole cells of the union). `name` keys the reused union-patch buffer; `out`: optional float32 array
         of the result's shape written in place."""
+        union = self._union_map(img, window, sx, sy, bounds, name)
+        return self._cut(union, sx, sy, offsets, bounds, out)
+
+    def _union_map(
+        self, img: np.ndarray, window: Box, sx: int, sy: int, bounds: tuple[int, int, int, int], name: str
+    ) -> np.ndarray:
+        """Unwindowed feature map (C, H, W) of the union of the windows of `_union_maps`."""
         c = self.cell
         ilo, ihi, jlo, jhi = bounds
         uw, uh = self.tw + (ihi - ilo) * sx * c, self.th + (jhi - jlo) * sy * c
@@ -223,9 +233,25 @@ class BaseFilter(ABC):
             sample_patch(img, union, uw, uh, out=patch[0])
         else:
             patch = sample_patch(img, union, uw, uh)[None]
-        feats = unwindowed_features(patch, self.kind, c)[0]
-        fh, fw = feature_shape(self.kind, self.th, self.tw, c)[1:]
+        return unwindowed_features(patch, self.kind, c)[0]
+
+    def _cut(
+        self,
+        feats: np.ndarray,
+        sx: int,
+        sy: int,
+        offsets: Sequence[tuple[int, int]],
+        bounds: tuple[int, int, int, int],
+        out: np.ndarray | None = None,
+        squared_window: bool = False,
+    ) -> np.ndarray:
+        """The windowed maps (len(offsets), C, rows, cols) cut from the union map `feats` of `_union_map`
+        (`squared_window`: times the cosine window squared, for the windows' energies)."""
+        ilo, _ihi, jlo, _jhi = bounds
+        fh, fw = self.shape[1:]
         win = cosine_window(fh, fw)
+        if squared_window:
+            win = (win * win).astype(np.float32)
         if out is None:
             out = np.empty((len(offsets), feats.shape[0], fh, fw), dtype=np.float32)
         # slices of the union map (steps are whole cells; gray: 1 px) times the window
@@ -281,14 +307,21 @@ class BaseFilter(ABC):
         return self._detections(responses, windows, scales if scales is not None else [1.0] * len(windows))
 
     def lattice_geometry(
-        self, window: Box, step: float, rings: int, image_size: tuple[int, int] | None = None
+        self,
+        window: Box,
+        step: float,
+        rings: int,
+        image_size: tuple[int, int] | None = None,
+        half: tuple[int, int] | None = None,
     ) -> tuple[int, int, list[tuple[int, int]], list[Box]]:
         """Re-detection lattice of (2 rings + 1)^2 windows around `window` (ours; variant measured).
 
         Centre steps are `step` x the window, snapped to whole template cells so that every window is a
         slice of one feature map (as in `grid_geometry`). Offsets whose window centre falls outside the
         image (`image_size` = (width, height)) are left out, and so is the centre (normal mode already
-        correlated it). Returns (step_x, step_y) in cells, the (i, j) offsets in steps and their windows.
+        correlated it). With `half` = (ring r, parity 0 or 1), the windows of rings r and beyond are kept
+        only where (i + j) % 2 == parity: a checkerboard, the other half searched on the next frame (ours).
+        Returns (step_x, step_y) in cells, the (i, j) offsets in steps and their windows.
         """
         c = self.cell
         sx = max(1, round(step * self.tw / c))
@@ -298,6 +331,8 @@ class BaseFilter(ABC):
         for j in range(-rings, rings + 1):
             for i in range(-rings, rings + 1):
                 if i == 0 and j == 0:
+                    continue
+                if half is not None and max(abs(i), abs(j)) >= half[0] and (i + j) % 2 != half[1]:
                     continue
                 win = window.shifted(i * sx * c * kx, j * sy * c * ky)
                 if image_size is not None and not (
@@ -315,6 +350,7 @@ class BaseFilter(ABC):
         step: float,
         rings: int,
         scale: float = 1.0,
+        half: tuple[int, int] | None = None,
     ) -> tuple[list[Detection], list[Box]]:
         """Detections in the re-detection lattice around `window` (see `lattice_geometry`) and its windows.
 
@@ -326,16 +362,34 @@ class BaseFilter(ABC):
         """
         self._train_features = None
         ih, iw = img.shape[:2]
-        sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih))
+        sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih), half)
         if not wins:
             return [], []
         cols = [i for i, _ in offsets] + [0]
         rows = [j for _, j in offsets] + [0]
         bounds = (min(cols), max(cols), min(rows), max(rows))
-        buf = self._scratch("lattice features", (len(wins), *self.shape))  # consumed by `respond` below
-        feats = self._union_maps(img, window, sx, sy, offsets, bounds, "lattice", buf)
-        responses = self.filter.respond(feats)
-        return self._detections(responses, wins, [scale] * len(wins)), wins
+        n, respond_projected = len(wins), getattr(self.filter, "respond_projected", None)
+        d = self.lattice_channels
+        if respond_projected is None or not 0 < d < self.shape[0] or n <= LATTICE_RESCORED:
+            # consumed by `respond` below; one buffer per count (the checkerboard halves differ at the border)
+            buf = self._scratch(f"lattice features {n}", (n, *self.shape))
+            feats = self._union_maps(img, window, sx, sy, offsets, bounds, "lattice", buf)
+            return self._detections(self.filter.respond(feats), wins, [scale] * n), wins
+        union = self._union_map(img, window, sx, sy, bounds, "lattice")
+        # (ours) screen every window on the model's d principal channels, then correlate the best few in full
+        basis = self.filter.projection(d)
+        projected = np.tensordot(basis.T, union, axes=1)
+        energy = np.einsum("chw,chw->hw", union, union)[None]
+        zz = self._cut(energy, sx, sy, offsets, bounds, squared_window=True).sum(axis=(1, 2, 3))
+        zp = self._scratch(f"lattice projected {n}", (n, d, *self.shape[1:]))
+        self._cut(np.ascontiguousarray(projected, dtype=np.float32), sx, sy, offsets, bounds, zp)
+        screen = respond_projected(zp, zz.astype(np.float64), d).reshape(n, -1).max(axis=1)
+        best = sorted(np.argsort(screen)[::-1][:LATTICE_RESCORED].tolist())
+        picked = [offsets[i] for i in best]
+        buf = self._scratch("lattice rescored", (len(best), *self.shape))
+        feats = self._cut(union, sx, sy, picked, bounds, buf)
+        dets = self._detections(self.filter.respond(feats), [wins[i] for i in best], [scale] * len(best))
+        return dets, wins
 
     def _detect_dsst(
         self, img: np.ndarray, windows: Sequence[Box], scales: Sequence[float] | None

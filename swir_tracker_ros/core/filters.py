@@ -204,9 +204,15 @@ class BACFFilter(KCFFilter):
         return super().detect_grid(img, self._window(window), overlap, scale, skip_centre)
 
     def detect_lattice(
-        self, img: np.ndarray, window: Box, step: float, rings: int, scale: float = 1.0
+        self,
+        img: np.ndarray,
+        window: Box,
+        step: float,
+        rings: int,
+        scale: float = 1.0,
+        half: tuple[int, int] | None = None,
     ) -> tuple[list[Detection], list[Box]]:
-        return super().detect_lattice(img, self._window(window), step, rings, scale)
+        return super().detect_lattice(img, self._window(window), step, rings, scale, half)
 
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """First-frame training, then the response gain from the filter's own training sample."""

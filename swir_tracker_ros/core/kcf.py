@@ -161,6 +161,8 @@ class KCF:
         self.model_xf: np.ndarray | None = None
         self.model_alphaf: np.ndarray | None = None
         self._spectra: tuple[np.ndarray, list[np.ndarray], int] | None = None  # last batch, its FFT chunks
+        # (model_x, d, basis P, spectrum of P'x) of the last `projection` call
+        self._projection: tuple[np.ndarray, int, np.ndarray, np.ndarray] | None = None
 
     @property
     def trained(self) -> bool:
@@ -196,6 +198,36 @@ class KCF:
 
     def respond(self, z: np.ndarray) -> np.ndarray:
         return self.respond_spectra(z, None)
+
+    def projection(self, d: int) -> np.ndarray:
+        """(C, d) orthonormal basis of the d principal channel directions of the model x (eigenvectors of
+        the C x C second-moment matrix of its channels, largest eigenvalues first: the PCA feature
+        compression of fDSST, Danelljan et al. "Discriminative Scale Space Tracking", TPAMI 2017), computed
+        once per model."""
+        kept = self._projection
+        if kept is not None and kept[0] is self.model_x and kept[1] == d:
+            return kept[2]
+        if self.model_x is None:
+            raise TrackerError("KCF.projection called before train")
+        x = self.model_x.reshape(self.model_x.shape[0], -1).astype(np.float64)
+        _vals, vecs = np.linalg.eigh(x @ x.T)
+        basis = np.ascontiguousarray(vecs[:, ::-1][:, :d], dtype=np.float32)
+        xpf = rfft2(np.tensordot(basis.T, self.model_x, axes=1).astype(np.float32))
+        self._projection = (self.model_x, d, basis, xpf.astype(np.complex64))
+        return basis
+
+    def respond_projected(self, zp: np.ndarray, zz: np.ndarray, d: int) -> np.ndarray:
+        """Approximate `respond` of windows z given as their projections zp = P'z on `projection(d)` and
+        their full squared norms zz: eq. 7 with the cross-correlation sum_c z_c * x_c replaced by
+        sum_k (P'z)_k * (P'x)_k = z * (P P'x), exact when x lies in the span of P."""
+        self.projection(d)
+        xpf = self._projection[3]
+        zf = rfft2(zp)
+        cross = np.einsum("nchw,chw->nhw", zf, np.conj(xpf))
+        xx = float(np.vdot(self.model_x, self.model_x))
+        numel = self.model_x.shape[0] * self.shape[0] * self.shape[1]
+        kzf = _kernel_spectrum(cross, zz, xx, self.params.kernel_sigma, self.shape, numel)
+        return irfft2(self.model_alphaf[None] * kzf, self.shape)
 
     def respond_spectra(self, z: np.ndarray, zf: np.ndarray | None) -> np.ndarray:
         """`respond` of the batch z whose spectra rfft2(z) are `zf` (None: computed here, chunk by chunk;

@@ -120,6 +120,24 @@ class TrackerParams:
         100000,
     )
     lattice_max_rings: int = _f(3, "(ours) widest re-detection lattice (3: 7x7 windows)", 1, 10)
+    lattice_channels: int = _f(
+        8,
+        "(ours) the re-detection lattice is screened with the filter projected on this many principal "
+        "channel directions of its model (the PCA feature compression of fDSST, Danelljan et al. TPAMI 2017) "
+        "and only the 3 best screened windows are correlated in full (KCF filters; the scores within their "
+        "noise, occlusion mode faster: docs/tracking_core.md, eighth pass); 0: every window in full",
+        0,
+        64,
+    )
+    lattice_alternate: int = _f(
+        2,
+        "(ours) the lattice's rings from this one outwards are searched as a checkerboard whose two halves "
+        "alternate frame to frame (the windows inside it every frame): from ring 2 a 7x7 lattice "
+        "correlates 28 windows a frame instead of 48, from ring 1 24 (which lost a synthetic occlusion); "
+        "a far target is found at most one frame later; 0: every window every frame",
+        0,
+        10,
+    )
     redetect_prior: float = _f(
         1.0,
         "(ours, variant measured) re-detection picks the window whose peak x exp(-d^2 / 2 sigma^2) is "
