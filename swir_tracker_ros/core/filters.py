@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -204,15 +205,10 @@ class BACFFilter(KCFFilter):
         return super().detect_grid(img, self._window(window), overlap, scale, skip_centre)
 
     def detect_lattice(
-        self,
-        img: np.ndarray,
-        window: Box,
-        step: float,
-        rings: int,
-        scale: float = 1.0,
-        half: tuple[int, int] | None = None,
+        self, img: np.ndarray, window: Box, *args: Any, **kwargs: Any
     ) -> tuple[list[Detection], list[Box]]:
-        return super().detect_lattice(img, self._window(window), step, rings, scale, half)
+        """`BaseFilter.detect_lattice` around the square window of `window`."""
+        return super().detect_lattice(img, self._window(window), *args, **kwargs)
 
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """First-frame training, then the response gain from the filter's own training sample."""
