@@ -204,24 +204,27 @@ class KCF:
         the C x C second-moment matrix of its channels, largest eigenvalues first: the PCA feature
         compression of fDSST, Danelljan et al. "Discriminative Scale Space Tracking", TPAMI 2017), computed
         once per model."""
+        return self._projected_model(d)[0]
+
+    def _projected_model(self, d: int) -> tuple[np.ndarray, np.ndarray]:
+        """(basis P of `projection`, rfft2 of the projected model P'x), kept while the model is unchanged."""
         kept = self._projection
         if kept is not None and kept[0] is self.model_x and kept[1] == d:
-            return kept[2]
+            return kept[2], kept[3]
         if self.model_x is None:
             raise TrackerError("KCF.projection called before train")
         x = self.model_x.reshape(self.model_x.shape[0], -1).astype(np.float64)
         _vals, vecs = np.linalg.eigh(x @ x.T)
         basis = np.ascontiguousarray(vecs[:, ::-1][:, :d], dtype=np.float32)
-        xpf = rfft2(np.tensordot(basis.T, self.model_x, axes=1).astype(np.float32))
-        self._projection = (self.model_x, d, basis, xpf.astype(np.complex64))
-        return basis
+        xpf = rfft2(np.tensordot(basis.T, self.model_x, axes=1).astype(np.float32)).astype(np.complex64)
+        self._projection = (self.model_x, d, basis, xpf)
+        return basis, xpf
 
     def respond_projected(self, zp: np.ndarray, zz: np.ndarray, d: int) -> np.ndarray:
         """Approximate `respond` of windows z given as their projections zp = P'z on `projection(d)` and
         their full squared norms zz: eq. 7 with the cross-correlation sum_c z_c * x_c replaced by
         sum_k (P'z)_k * (P'x)_k = z * (P P'x), exact when x lies in the span of P."""
-        self.projection(d)
-        xpf = self._projection[3]
+        _basis, xpf = self._projected_model(d)
         zf = rfft2(zp)
         cross = np.einsum("nchw,chw->nhw", zf, np.conj(xpf))
         xx = float(np.vdot(self.model_x, self.model_x))
