@@ -11,7 +11,7 @@ import numpy as np
 
 from swir_tracker_ros.errors import KalmanError
 from swir_tracker_ros.kalman.influence import Influence
-from swir_tracker_ros.kalman.statlin import METHODS, scalar_update
+from swir_tracker_ros.kalman.statlin import METHODS, scalar_step
 
 
 @dataclass(frozen=True)
@@ -94,33 +94,42 @@ def sequential_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray
     used_threshold = influence.threshold if (influence is not None and robust and method != "A1") else None
 
     finite = np.isfinite(z)
-    nonfinite = not bool(finite.all())
-    idx = np.flatnonzero(finite)
-    if idx.size == 0:
-        return x.copy(), P.copy(), coast_info(m, used_threshold, nonfinite)
-    zs, Hs, Rs = z[idx], H[idx], R[np.ix_(idx, idx)]
-    if np.count_nonzero(Rs - np.diag(np.diag(Rs))):
+    if m and finite.all():  # the usual case: every component, no fancy-indexed copies
+        nonfinite = False
+        idx: Sequence[int] | np.ndarray = range(m)
+        zs, Rs = z, R
+        Hs = H if H.flags.c_contiguous else np.ascontiguousarray(H)  # rows laid out as those of H[idx]
+    else:
+        nonfinite = not bool(finite.all())
+        idx = np.flatnonzero(finite)
+        if idx.size == 0:
+            return x.copy(), P.copy(), coast_info(m, used_threshold, nonfinite)
+        zs, Hs, Rs = z[idx], H[idx], R[np.ix_(idx, idx)]
+    # off-diagonal nonzeros (R is finite with a positive diagonal: check_matrices)
+    if np.count_nonzero(Rs) != np.count_nonzero(Rs.diagonal()):
         try:
             L = np.linalg.cholesky(Rs)
         except np.linalg.LinAlgError:
             raise KalmanError("measurement covariance R is not positive definite") from None
         zs = np.linalg.solve(L, zs)
         Hs = np.linalg.solve(L, Hs)
-        rs = np.ones(idx.size)
+        rs: list[float] = [1.0] * len(idx)
     else:
-        rs = np.diag(Rs).copy()
+        rs = Rs.diagonal().tolist()
+    ys: list[float] = zs.tolist()  # Python floats: the same IEEE operations as float64 scalars, faster
 
     used = np.zeros(m, dtype=bool)
     innov, norm, weights, alphas = (np.zeros(m) for _ in range(4))
     for pos, j in enumerate(idx):
         is_robust = j in robust
-        xn, Pn, st = scalar_update(x, P, zs[pos], Hs[pos], rs[pos], influence if is_robust else None,
-                                   method if is_robust else "A1", alpha_f)
+        xn, Pn, eps, _, u, w, alpha = scalar_step(x, P, ys[pos], Hs[pos], rs[pos],
+                                                  influence if is_robust else None,
+                                                  method if is_robust else "A1", alpha_f)
         if not (np.isfinite(xn).all() and np.isfinite(Pn).all()):
             nonfinite = True  # overflow from an absurd value: treat as missed, keep the state clean
             continue
         x, P = xn, Pn
         used[j] = True
-        innov[j], norm[j], weights[j], alphas[j] = st.innovation, st.normalized, st.weight, st.alpha
+        innov[j], norm[j], weights[j], alphas[j] = eps, u, w, alpha
     info = UpdateInfo(not used.any(), nonfinite, used, innov, norm, weights, alphas, used_threshold)
     return x, P, info

@@ -102,21 +102,33 @@ def scalar_update(x: np.ndarray, P: np.ndarray, y: float, h: np.ndarray, r: floa
 
     Returns the new (x, P) and a `ScalarStep`; inputs are not modified.
     """
+    x_new, P_new, eps, s, u, w, alpha = scalar_step(x, P, y, h, r, influence, method, alpha_f)
+    return x_new, P_new, ScalarStep(eps, s, u, w, alpha)
+
+
+def scalar_step(x: np.ndarray, P: np.ndarray, y: float, h: np.ndarray, r: float,
+                influence: Influence | None, method: str,
+                alpha_f: float | None) -> tuple[np.ndarray, np.ndarray, float, float, float, float, float]:
+    """`scalar_update` returning its diagnostics as a plain tuple (x, P, eps, s, u, w, alpha).
+
+    The per-component loop of `sequential.sequential_update` calls this: the frozen `ScalarStep` costs
+    more to build than several of the array operations here. The operations, their order and their
+    operand types are those of the standard update, so the results are the same bits; ``y`` and ``r``
+    may be Python floats or numpy float64 scalars (the same IEEE operations either way).
+    """
     g = P @ h  # M h'
-    hmh = float(h @ g)
-    s2 = hmh + r
+    s2 = float(h @ g) + r
     if not (s2 > 0.0 and math.isfinite(s2)):
         raise KalmanError(f"innovation variance h M h' + r = {s2!r} is not a positive finite number")
     s = math.sqrt(s2)
     eps = float(y - h @ x)
     u = eps / s
     if influence is None or method == "A1":
-        w = 1.0
-        alpha, c = 1.0, 1.0
+        w = alpha = c = 1.0
     else:
         w = float(influence.weight(u))
         alpha, c = coefficients(w, method, alpha_f)
-    alpha = min(max(alpha, 0.0), 1.0)
+        alpha = min(max(alpha, 0.0), 1.0)
     K0 = g / s2
     x_new = x + K0 * (eps * c)
     # Joseph form for the Kalman gain K0: P = (I - K0 h) M (I - K0 h)' + K0 r K0'
@@ -124,4 +136,4 @@ def scalar_update(x: np.ndarray, P: np.ndarray, y: float, h: np.ndarray, r: floa
     J = IKH @ P @ IKH.T + (r * K0)[:, None] * K0[None, :]
     J = 0.5 * (J + J.T)
     P_new = J if alpha == 1.0 else (1.0 - alpha) * P + alpha * J
-    return x_new, P_new, ScalarStep(eps, s, u, w, alpha)
+    return x_new, P_new, eps, s, u, w, alpha
