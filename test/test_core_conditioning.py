@@ -112,6 +112,29 @@ def test_percentiles_equal_np_percentile() -> None:
         assert _percentiles(sample, low, high) == want
 
 
+def test_counted_percentile_limits_equal_np_percentile() -> None:
+    """8/16-bit frames take counted order statistics (core/corr_jit.py, no partition of a float32 copy):
+    np.percentile's numbers of the float32 subsample, bit for bit (ties, contiguous or not, full range)."""
+    from swir_tracker_ros.core.conditioning import percentile_limits
+
+    rng = np.random.default_rng(11)
+    for k in range(600):
+        dtype = np.uint8 if k % 2 else np.uint16
+        rows, cols = (int(v) for v in rng.integers(1, 200, 2))
+        top = 256 if dtype == np.uint8 else int(rng.choice([2, 300, 4096, 65536]))
+        frame = rng.integers(0, top, (rows, cols)).astype(dtype)
+        if k % 5 == 0:
+            frame = frame[:, ::2]  # a strided view
+        low, high = (0.5, 99.5) if k % 4 == 0 else (100 * rng.random(), 100 * rng.random())
+        if k % 9 == 0:
+            low, high = float(rng.choice([0.0, 100.0])), float(rng.choice([0.0, 100.0]))
+        max_samples = int(rng.choice([10000, 50, 1]))
+        step = max(1, int(np.sqrt(frame.size / max_samples)))
+        sample = frame[::step, ::step].ravel().astype(np.float32)
+        want = tuple(float(v) for v in np.percentile(sample, [low, high]))
+        assert percentile_limits(frame, low, high, max_samples) == want
+
+
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
 @pytest.mark.parametrize("stretch", ["auto", "always", "off"])
 def test_fused_stretch_equals_the_numpy_passes(

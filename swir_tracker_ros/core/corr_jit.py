@@ -109,3 +109,62 @@ def cell_means_kernel(planes: np.ndarray, cell: int, out: np.ndarray) -> None:
                             t += row[x * cell + q]
                         s += t
                     dst[y, x] = s / count
+
+
+@njit(cache=True, nogil=True)
+def order_statistics_kernel(src: np.ndarray, step: int, ranks: np.ndarray, out: np.ndarray) -> None:
+    """out[i] = the ranks[i]-th smallest (0-based) value of the subsample src[::step, ::step] (uint8/uint16).
+
+    `conditioning.percentile_limits`' order statistics without copying the subsample twice (slicing,
+    float32) and partitioning it: a count of the high bytes finds each rank's bucket, a count of the low
+    bytes inside those buckets its value. Integer counting: the values are exactly those of np.partition
+    at the same ranks (each rank must lie in [0, n), n the subsample size).
+    """
+    rows, cols = src.shape
+    n_r = (rows + step - 1) // step
+    n_c = (cols + step - 1) // step
+    n_k = ranks.shape[0]
+    buf = np.empty(n_r * n_c, dtype=np.int32)
+    # four interleaved counts: consecutive pixels of a smooth frame hit the same bin, and one count per
+    # pixel would wait on the previous pixel's increment
+    hist = np.zeros((4, 256), dtype=np.int64)
+    i = 0
+    for y in range(n_r):
+        row = src[y * step]
+        for x in range(n_c):
+            v = np.int32(row[x * step])
+            buf[i] = v
+            hist[i & 3, v >> 8] += 1
+            i += 1
+    slot = np.full(256, -1, dtype=np.int32)  # bucket -> row of hist_lo, -1: no rank falls in it
+    rank_slot = np.empty(n_k, dtype=np.int32)
+    rest = np.empty(n_k, dtype=np.int64)
+    bucket = np.empty(n_k, dtype=np.int32)
+    n_s = 0
+    for k in range(n_k):
+        left = ranks[k]
+        b = 0
+        while True:
+            c = hist[0, b] + hist[1, b] + hist[2, b] + hist[3, b]
+            if left < c:
+                break
+            left -= c
+            b += 1
+        if slot[b] < 0:
+            slot[b] = n_s
+            n_s += 1
+        rank_slot[k], rest[k], bucket[k] = slot[b], left, b
+    hist_lo = np.zeros((n_s, 256), dtype=np.int64)
+    for j in range(buf.shape[0]):
+        v = buf[j]
+        s = slot[v >> 8]
+        if s >= 0:
+            hist_lo[s, v & 255] += 1
+    for k in range(n_k):
+        counts = hist_lo[rank_slot[k]]
+        left = rest[k]
+        lo = 0
+        while left >= counts[lo]:
+            left -= counts[lo]
+            lo += 1
+        out[k] = (bucket[k] << 8) | lo

@@ -135,6 +135,8 @@ def warm_up() -> bool:
         cj.cut_windows_kernel(win[None], win, one, one, np.empty((1, 1, 2, 2), np.float32))
         for dtype in (np.uint8, np.uint16):  # the frame types the conditioner stretches
             cj.stretch_kernel(np.zeros((2, 2), dtype), np.float32(0.0), np.float32(1.0), win)
+            ranks, values = np.zeros(4, np.intp), np.empty(4, np.int64)
+            cj.order_statistics_kernel(np.zeros((2, 2), dtype), 1, ranks, values)
     return True
 
 
