@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,36 +107,37 @@ def analyse_batch(responses: np.ndarray, exclusion: int = 10) -> list[Peak]:
     rows = (r_idx[:, None] + (np.arange(eh) - eh // 2)) % h
     cols = (c_idx[:, None] + (np.arange(ew) - ew // 2)) % w
     region = resp[np.arange(n_win)[:, None, None], rows[:, :, None], cols[:, None, :]]
-    sq = np.square(resp)
     total = resp.sum(axis=(1, 2)).tolist()
-    total_sq = sq.sum(axis=(1, 2)).tolist()
+    total_sq = np.square(resp).sum(axis=(1, 2)).tolist()
     reg = region.sum(axis=(1, 2)).tolist()
     reg_sq = np.square(region).sum(axis=(1, 2)).tolist()
-    gmax = flat.max(axis=1)
     gmin = flat.min(axis=1)
-    energy = np.mean(np.square(resp - gmin[:, None, None]), axis=(1, 2)).tolist()
-    gmax_l, gmin_l = gmax.tolist(), gmin.tolist()
-    # the three samples of the sub-pixel parabolas, wrapped
-    up = flat[np.arange(n_win), ((r_idx - 1) % h) * w + c_idx].tolist()
-    down = flat[np.arange(n_win), ((r_idx + 1) % h) * w + c_idx].tolist()
-    left = flat[np.arange(n_win), r_idx * w + (c_idx - 1) % w].tolist()
-    right = flat[np.arange(n_win), r_idx * w + (c_idx + 1) % w].tolist()
-    values = flat[np.arange(n_win), idx].tolist()
+    # np.mean: the same sum, divided by the element count
+    energy = (np.square(resp - gmin[:, None, None]).sum(axis=(1, 2)) / (h * w)).tolist()
+    gmin_l = gmin.tolist()
+    # the peak value (also the maximum: argmax is the first maximum, or the first NaN as max's NaN) and
+    # the three samples of each sub-pixel parabola, wrapped: one gather
+    up = ((r_idx - 1) % h) * w + c_idx
+    down = ((r_idx + 1) % h) * w + c_idx
+    left = r_idx * w + (c_idx - 1) % w
+    right = r_idx * w + (c_idx + 1) % w
+    samples = flat[np.arange(n_win), np.stack([idx, up, down, left, right])].tolist()
+    values, up_l, down_l, left_l, right_l = samples
     n_side = h * w - eh * ew
     out = []
-    for k in range(n_win):
-        r, c, value = int(r_idx[k]), int(c_idx[k]), values[k]
-        dr = subpixel_offset(up[k], value, down[k]) if h > 2 else 0.0
-        dc = subpixel_offset(left[k], value, right[k]) if w > 2 else 0.0
+    for k, (r, c) in enumerate(zip(r_idx.tolist(), c_idx.tolist(), strict=True)):
+        value = values[k]
+        dr = subpixel_offset(up_l[k], value, down_l[k]) if h > 2 else 0.0
+        dc = subpixel_offset(left_l[k], value, right_l[k]) if w > 2 else 0.0
         row, col = _signed(r + dr, h), _signed(c + dc, w)
         if n_side < 2:
             p = 0.0
         else:
             mean = (total[k] - reg[k]) / n_side
             var = max((total_sq[k] - reg_sq[k]) / n_side - mean * mean, 0.0)
-            std = np.sqrt(var)
-            p = float((value - mean) / std) if std > 1e-12 else 0.0
+            std = math.sqrt(var)  # np.sqrt's correctly rounded square root
+            p = (value - mean) / std if std > 1e-12 else 0.0
         e = energy[k]
-        a = (gmax_l[k] - gmin_l[k]) ** 2 / e if e > 1e-20 else 0.0
+        a = (value - gmin_l[k]) ** 2 / e if e > 1e-20 else 0.0
         out.append(Peak(row=row, col=col, value=value, psr=p, apce=a))
     return out
