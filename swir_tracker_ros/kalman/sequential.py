@@ -137,5 +137,5 @@ def sequential_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray
         x, P = xn, Pn
         used[j] = True
         innov[j], norm[j], weights[j], alphas[j] = eps, u, w, alpha
-    info = UpdateInfo(not used.any(), nonfinite, used, innov, norm, weights, alphas, used_threshold)
-    return x, P, info
+    coasted = not np.count_nonzero(used)
+    return x, P, UpdateInfo(coasted, nonfinite, used, innov, norm, weights, alphas, used_threshold)
