@@ -116,27 +116,30 @@ def order_statistics_kernel(src: np.ndarray, step: int, ranks: np.ndarray, out: 
     """out[i] = the ranks[i]-th smallest (0-based) value of the subsample src[::step, ::step] (uint8/uint16).
 
     `conditioning.percentile_limits`' order statistics without copying the subsample twice (slicing,
-    float32) and partitioning it: a count of the high bytes finds each rank's bucket, a count of the low
-    bytes inside those buckets its value. Integer counting: the values are exactly those of np.partition
-    at the same ranks (each rank must lie in [0, n), n the subsample size).
+    float32) and partitioning it: a count of the high bytes finds each rank's bucket, a second pass counts
+    the low bytes inside those buckets. Integer counting: the values are exactly those of np.partition at
+    the same ranks (each rank must lie in [0, n), n the subsample size).
     """
     rows, cols = src.shape
     n_r = (rows + step - 1) // step
     n_c = (cols + step - 1) // step
     n_k = ranks.shape[0]
-    buf = np.empty(n_r * n_c, dtype=np.int32)
-    # four interleaved counts: consecutive pixels of a smooth frame hit the same bin, and one count per
-    # pixel would wait on the previous pixel's increment
-    hist = np.zeros((4, 256), dtype=np.int64)
-    i = 0
+    # four interleaved counts (hist[256 q + b]): neighbouring pixels of a smooth frame share a bucket, and
+    # a single count would make each increment wait for the previous one
+    hist = np.zeros(4 * 256, dtype=np.int32)
     for y in range(n_r):
         row = src[y * step]
-        for x in range(n_c):
-            v = np.int32(row[x * step])
-            buf[i] = v
-            hist[i & 3, v >> 8] += 1
-            i += 1
-    slot = np.full(256, -1, dtype=np.int32)  # bucket -> row of hist_lo, -1: no rank falls in it
+        x = 0
+        while x + 3 < n_c:
+            hist[np.int32(row[x * step]) >> 8] += 1
+            hist[256 + (np.int32(row[(x + 1) * step]) >> 8)] += 1
+            hist[512 + (np.int32(row[(x + 2) * step]) >> 8)] += 1
+            hist[768 + (np.int32(row[(x + 3) * step]) >> 8)] += 1
+            x += 4
+        while x < n_c:
+            hist[np.int32(row[x * step]) >> 8] += 1
+            x += 1
+    slot = np.full(256, -1, dtype=np.int32)  # bucket -> row of hist_lo; -1: no rank falls in it
     rank_slot = np.empty(n_k, dtype=np.int32)
     rest = np.empty(n_k, dtype=np.int64)
     bucket = np.empty(n_k, dtype=np.int32)
@@ -145,7 +148,7 @@ def order_statistics_kernel(src: np.ndarray, step: int, ranks: np.ndarray, out: 
         left = ranks[k]
         b = 0
         while True:
-            c = hist[0, b] + hist[1, b] + hist[2, b] + hist[3, b]
+            c = hist[b] + hist[256 + b] + hist[512 + b] + hist[768 + b]
             if left < c:
                 break
             left -= c
@@ -154,12 +157,14 @@ def order_statistics_kernel(src: np.ndarray, step: int, ranks: np.ndarray, out: 
             slot[b] = n_s
             n_s += 1
         rank_slot[k], rest[k], bucket[k] = slot[b], left, b
-    hist_lo = np.zeros((n_s, 256), dtype=np.int64)
-    for j in range(buf.shape[0]):
-        v = buf[j]
-        s = slot[v >> 8]
-        if s >= 0:
-            hist_lo[s, v & 255] += 1
+    hist_lo = np.zeros((n_s, 256), dtype=np.int32)
+    for y in range(n_r):
+        row = src[y * step]
+        for x in range(n_c):
+            v = np.int32(row[x * step])
+            s = slot[v >> 8]
+            if s >= 0:
+                hist_lo[s, v & 255] += 1
     for k in range(n_k):
         counts = hist_lo[rank_slot[k]]
         left = rest[k]
