@@ -37,6 +37,7 @@ def test_compiled_cell_means_equal_numpy_mean_bit_for_bit(
         monkeypatch.setattr(fhog_module, "USE_JIT", True)
         assert fast.shape == slow.shape == (3, planes.shape[1], 250 // cell, 101 // cell)
         np.testing.assert_array_equal(fast, slow)
+        assert fast.tobytes() == slow.tobytes()  # bit for bit (signed zeros too)
     if cell < 8:  # the compiled loop did run (cell 8: numpy's unrolled pairwise sum, numpy path kept)
         assert fhog_module.corr_jit().cell_means_kernel.signatures
 
