@@ -20,14 +20,52 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, nogil=True)
 def cross_spectrum_kernel(zf: np.ndarray, xf: np.ndarray, out: np.ndarray) -> None:
     """out[n] = sum over c of zf[n, c] * conj(xf[c]) (complex64), channels summed in order.
 
-    zf: (N, C, rows, k) complex64, xf: (C, rows, k) complex64, out: (N, rows, k) complex64. One row of
-    accumulators per (n, row) stays in cache while the channels stream past (paper 000 eq. 7: the sum of
-    the per-channel correlations in the Fourier domain).
+    zf: (N, C, rows, k) complex64, xf: (C, rows, k) complex64, out: (N, rows, k) complex64 (paper 000
+    eq. 7: the sum of the per-channel correlations in the Fourier domain). C-contiguous arrays (the
+    callers') are summed over all rows * k frequencies at once, one long vectorised inner loop
+    (`channel_sum_kernel`; k is only cols // 2 + 1, 13 at the default template: 2.7x faster for 5
+    windows); other layouts row by row (`cross_spectrum_rows_kernel`). The same sums either way.
     """
+    n_win, n_ch, rows, k = zf.shape
+    if zf.flags.c_contiguous and xf.flags.c_contiguous and out.flags.c_contiguous:
+        m = rows * k  # reshape: views of the contiguous arrays
+        channel_sum_kernel(zf.reshape(n_win, n_ch, m), xf.reshape(n_ch, m), out.reshape(n_win, m))
+    else:
+        cross_spectrum_rows_kernel(zf, xf, out)
+
+
+@njit(cache=True, nogil=True)
+def channel_sum_kernel(zf: np.ndarray, xf: np.ndarray, out: np.ndarray) -> None:
+    """out[n, j] = sum over c of zf[n, c, j] * conj(xf[c, j]): zf (N, C, M), xf (C, M), out (N, M)
+    complex64. One row of accumulators per window stays in cache while the channels stream past."""
+    n_win, n_ch, m = zf.shape
+    acc_r = np.empty(m, dtype=np.float32)
+    acc_i = np.empty(m, dtype=np.float32)
+    for n in range(n_win):
+        for j in range(m):
+            acc_r[j] = np.float32(0.0)
+            acc_i[j] = np.float32(0.0)
+        for c in range(n_ch):
+            zc = zf[n, c]
+            xc = xf[c]
+            for j in range(m):
+                a = zc[j]
+                b = xc[j]
+                ar, ai, br, bi = a.real, a.imag, b.real, -b.imag
+                acc_r[j] += ar * br - ai * bi
+                acc_i[j] += ar * bi + ai * br
+        dst = out[n]
+        for j in range(m):
+            dst[j] = complex(acc_r[j], acc_i[j])
+
+
+@njit(cache=True, nogil=True)
+def cross_spectrum_rows_kernel(zf: np.ndarray, xf: np.ndarray, out: np.ndarray) -> None:
+    """`cross_spectrum_kernel` for any layout: one row of accumulators per (n, row) while the channels
+    stream past."""
     n_win, n_ch, rows, k = zf.shape
     acc_r = np.empty(k, dtype=np.float32)
     acc_i = np.empty(k, dtype=np.float32)
