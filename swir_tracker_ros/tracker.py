@@ -255,6 +255,8 @@ class Tracker:
                 cand = [dets[mid], *cand]
             det = max(cand, key=self._redetection_score(pred, wins[mid], rings))
             shown = tuple(grid)
+        if not failed and self._weak(det.peak, p.size_rate_peak_ratio):
+            kf.x[self._size_rates] = 0.0  # (ours) a weak frame's size is measured, not extrapolated
         size = (
             (pred.w * det.scale, pred.h * det.scale)
             if not failed or p.grid_scale_search
@@ -269,7 +271,7 @@ class Tracker:
         rejected, learn, weak = False, False, False
         if not failed:
             # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
-            weak = rejected = self._occluded > 0 and self._weak(det.peak)
+            weak = rejected = self._occluded > 0 and (self._weak(det.peak) or det.psr < p.redetect_psr)
             if not rejected:
                 rejected, learn = self._memory_verdict(best)
         if rejected and self._rejected_held(weak, best):
@@ -461,12 +463,14 @@ class Tracker:
 
         return score
 
-    def _weak(self, peak: float) -> bool:
-        """(ours, variant measured) Is `peak` too weak to re-acquire the target (`redetect_peak_ratio`)?"""
+    def _weak(self, peak: float, ratio: float | None = None) -> bool:
+        """(ours, variant measured) Is `peak` below `ratio` (default `redetect_peak_ratio`: too weak to
+        re-acquire the target) x the mean peak of the tracked frames?"""
         p = self.params
         if p.variant != "measured" or not self._peak_n:
             return False
-        return peak < p.redetect_peak_ratio * self._peak_sum / self._peak_n
+        bar = p.redetect_peak_ratio if ratio is None else ratio
+        return peak < bar * self._peak_sum / self._peak_n
 
     def _rings(self) -> int:
         """Rings of the re-detection lattice: they widen with the frames since the last confident frame."""

@@ -9,6 +9,9 @@ import pytest
 
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.windows import search_window
+from swir_tracker_ros.harness.evaluate import run_starts
+from swir_tracker_ros.harness.protocol import RunStats
+from swir_tracker_ros.harness.sources import open_source
 from swir_tracker_ros.scene.camera import CameraView
 from swir_tracker_ros.scene.demo_scene import build_scene
 from swir_tracker_ros.tracker import Tracker, TrackerParams
@@ -170,3 +173,19 @@ def test_the_principal_channel_screen_keeps_the_full_lattice_winner(steps: tuple
     assert best[1] == best[0]
     assert abs(best[0].cx - box.cx) < 0.1 * box.w
 
+
+def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
+    """Synthetic x_low_contrast_interlaced from the SRE start shifted to the top left: while the walker is
+    hidden, the occluder's vertical edge gives a non-failed response (PSR 7-9, peak and memory score just
+    over their bars) and was taken back as the target: 190 frames `tracking` on the wall (measured). With
+    `redetect_psr` 10 (the default; the failure test fires below 7) such a frame stays `occluded`: no
+    false-tracking frame (measured). The walker is not found again from this start either (the box waits on
+    the edge, `occluded`): an honest loss instead of a false lock."""
+    src = open_source("synth:x_low_contrast_interlaced")
+
+    def stats(psr: float) -> RunStats:
+        factory = lambda: Tracker(TrackerParams(redetect_psr=psr))  # noqa: E731
+        return RunStats.of(run_starts(src, factory, starts=("top_left",))["top_left"], src.fps)
+
+    off, on = stats(0.0), stats(10.0)
+    assert off.false_tracking > 100 and on.false_tracking == 0, (off, on)

@@ -100,6 +100,24 @@ class TrackerParams:
         0.0,
         2.0,
     )
+    size_rate_peak_ratio: float = _f(
+        0.6,
+        "(ours, variant measured) a tracked frame whose peak is below this ratio of the tracked peaks' mean "
+        "zeroes the size velocity before its Kalman update: the sizes of weak, changing responses (a target "
+        "that turns) are measured but not extrapolated, so the box no longer shrinks away frame after frame "
+        "(VOT-TIR horse, OTB girl: docs/tracking_core.md, ninth pass); 0: off (the papers)",
+        0.0,
+        2.0,
+    )
+    redetect_psr: float = _f(
+        10.0,
+        "(ours, variant measured) re-acquisition also needs a PSR of at least this, a hysteresis over the "
+        "failure test's PSR 7: a first non-failed frame after an occlusion below it stays `occluded` (a "
+        "static edge of the occluder gave PSR 7-9 with a peak and a memory score just over their bars: "
+        "synthetic x_low_contrast_interlaced; docs/tracking_core.md, ninth pass); 0: off",
+        0.0,
+        100.0,
+    )
     lattice_step: float = _f(
         0.35,
         "(ours, variant measured) re-detection searches a lattice of windows this fraction of a window "
