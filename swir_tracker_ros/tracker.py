@@ -271,7 +271,7 @@ class Tracker:
         rejected, learn, weak = False, False, False
         if not failed:
             # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
-            weak = rejected = self._occluded > 0 and (self._weak(det.peak) or det.psr < p.redetect_psr)
+            weak = rejected = self._occluded > 0 and (self._weak(det.peak) or self._low_psr(det.psr))
             if not rejected:
                 rejected, learn = self._memory_verdict(best)
         if rejected and self._rejected_held(weak, best):
@@ -471,6 +471,10 @@ class Tracker:
             return False
         bar = p.redetect_peak_ratio if ratio is None else ratio
         return peak < bar * self._peak_sum / self._peak_n
+
+    def _low_psr(self, psr: float) -> bool:
+        """(ours, variant measured) Is `psr` below the re-acquisition bar `redetect_psr`?"""
+        return self.params.variant == "measured" and psr < self.params.redetect_psr
 
     def _rings(self) -> int:
         """Rings of the re-detection lattice: they widen with the frames since the last confident frame."""

@@ -189,3 +189,16 @@ def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
 
     off, on = stats(0.0), stats(12.0)
     assert off.false_tracking > 100 and on.false_tracking == 0, (off, on)
+
+
+def test_the_papers_variants_ignore_the_ninth_pass_rules() -> None:
+    """`redetect_psr` and `size_rate_peak_ratio` are rules of variant `measured`: the papers' pipelines (here
+    `robust_adaptive`, paper 000) give the same boxes and states whatever their values."""
+    src = open_source("synth:t1_full_static_size")
+
+    def run(**kw: float) -> tuple[list, list]:
+        factory = lambda: Tracker(TrackerParams(variant="robust_adaptive", **kw))  # noqa: E731
+        r = run_starts(src, factory, starts=("left",))["left"]
+        return r.pred, r.states
+
+    assert run(redetect_psr=0.0, size_rate_peak_ratio=0.0) == run(redetect_psr=50.0, size_rate_peak_ratio=2.0)
