@@ -473,8 +473,9 @@ class Tracker:
         return peak < bar * self._peak_sum / self._peak_n
 
     def _low_psr(self, psr: float) -> bool:
-        """(ours, variant measured) Is `psr` below the re-acquisition bar `redetect_psr`?"""
-        return self.params.variant == "measured" and psr < self.params.redetect_psr
+        """(ours, variant measured, pipeline kcf) Is `psr` below the re-acquisition bar `redetect_psr`?"""
+        p = self.params
+        return p.variant == "measured" and p.pipeline == "kcf" and psr < p.redetect_psr
 
     def _rings(self) -> int:
         """Rings of the re-detection lattice: they widen with the frames since the last confident frame."""

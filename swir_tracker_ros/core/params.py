@@ -114,7 +114,8 @@ class TrackerParams:
         "(ours, variant measured) re-acquisition also needs a PSR of at least this, a hysteresis over the "
         "failure test's PSR 7: a first non-failed frame after an occlusion below it stays `occluded` (a "
         "static edge of the occluder was taken back at PSR 7-12, its peak and memory score just over their "
-        "bars: synthetic x_low_contrast_interlaced; docs/tracking_core.md, ninth pass); 0: off",
+        "bars: synthetic x_low_contrast_interlaced; docs/tracking_core.md, ninth pass); pipeline kcf only "
+        "(BACF's flatter responses keep PSRs near 7 on the target); 0: off",
         0.0,
         100.0,
     )
