@@ -473,9 +473,10 @@ class Tracker:
         return peak < bar * self._peak_sum / self._peak_n
 
     def _low_psr(self, psr: float) -> bool:
-        """(ours, variant measured, pipeline kcf) Is `psr` below the re-acquisition bar `redetect_psr`?"""
+        """(ours, variant measured; filters with `psr_reacquisition`) Is `psr` below the re-acquisition bar
+        `redetect_psr`?"""
         p = self.params
-        return p.variant == "measured" and p.pipeline == "kcf" and psr < p.redetect_psr
+        return p.variant == "measured" and self._bank.psr_reacquisition and psr < p.redetect_psr
 
     def _rings(self) -> int:
         """Rings of the re-detection lattice: they widen with the frames since the last confident frame."""

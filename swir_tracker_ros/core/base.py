@@ -62,6 +62,8 @@ class BaseFilter(ABC):
     name: ClassVar[str]
     robust_method: ClassVar[str]  # statistical linearisation of the robust Kalman update (kalman/statlin.py)
     threshold_map: ClassVar[ThresholdMap]  # peak -> Huber threshold (paper 000 eq. 38 / dissertation eq. 6.9)
+    # (ours) re-acquisition also needs PSR >= `redetect_psr`: only filters whose PSRs that bar was measured on
+    psr_reacquisition: ClassVar[bool] = False
 
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         fp = self.own_params(p)

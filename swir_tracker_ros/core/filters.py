@@ -33,6 +33,7 @@ class KCFFilter(BaseFilter):
     name = "kcf"
     robust_method = "A4"
     threshold_map = PAPER000_KCF
+    psr_reacquisition = True
 
     def _build(self) -> KCF:
         return KCF(self.fp, self.shape, self.target_cells)
@@ -145,6 +146,7 @@ class BACFFilter(KCFFilter):
     """
 
     name = "bacf"
+    psr_reacquisition = False  # its flatter responses keep PSRs near 7 on the target
 
     def __init__(self, p: TrackerParams, w: float, h: float) -> None:
         self._size = (w, h)
