@@ -13,6 +13,8 @@ from swir_tracker_ros.harness.compare import BENCH, PeerCache, bench_python, run
 from swir_tracker_ros.harness.evaluate import Run
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
+    carried_truth,
+    carry,
     false_tracking,
     occlusion_episodes,
     occlusions_survived,
@@ -142,6 +144,44 @@ needs_bench = pytest.mark.skipif(not (BENCH / ".installed").exists(),
 
 
 @needs_bench
+def test_carried_truth_keeps_the_start_offset_and_scale():
+    ref = Box(100, 50, 40, 80)
+    start = sre_box(ref, "scale_0.8", 640, 480)  # (104, 58, 32, 64)
+    later = Box(200, 100, 20, 40)  # the target moved and halved
+    assert carry(start, ref, later).as_tuple() == pytest.approx((202, 104, 16, 32))
+    left = sre_box(ref, "left", 640, 480)  # 4 px = 10 % of the width to the left
+    assert carry(left, ref, later).as_tuple() == pytest.approx((198, 100, 20, 40))
+    assert carried_truth(start, ref, [None, later])[0] is None
+
+
+def test_run_stats_carried_and_floor_scores():
+    """A tracker that follows the target exactly but keeps a 0.8 start's scale scores IoU 0.64 on every
+    frame against the ground truth (the floor) and 1.0 against the carried truth (AUC 20/21: no IoU
+    exceeds the last threshold, 1.0); the SRE summary's floor
+    spread over the 12 OTB starts of a steady target is 0.826 - 0.64 (scale 1.1 against scale 0.8)."""
+    gts = [Box(100 + 3 * k, 50, 40, 80) for k in range(6)]
+    runs = {}
+    for p in SRE_PERTURBATIONS:
+        start = sre_box(gts[0], p, 640, 480)
+        truth = carried_truth(start, gts[0], gts)
+        runs[p] = RunStats.of(Run(truth, gts, [None] * 6, 1.0, ["init"] + ["tracking"] * 5, [None] * 6,
+                                  start, 0), 25.0)
+    assert runs["scale_0.8"].carried_auc == pytest.approx(20 / 21)
+    # IoU 0.64 passes the thresholds 0, 0.05, ..., 0.6: 13 of 21
+    assert runs["scale_0.8"].floor_auc == pytest.approx(13 / 21)
+    res = ProtocolResult(("sre",), {"s": {"t": runs}}, {"s": "real"}, ["t"])
+    sre = res.sre("s", "t")
+    assert sre["carried_spread"] == pytest.approx(0.0) and sre["floor_spread"] == pytest.approx(4 / 21)
+    summ = res.summary("t", ["s"])
+    assert summ["sre_floor_spread"] == pytest.approx(4 / 21)
+    assert summ["sre_carried_mean"] == pytest.approx(20 / 21)
+    old = ProtocolResult.from_json({"protocols": ["sre"], "trackers": ["t"], "sequences": {"s": {
+        "kind": "real", "t": {"ope": None, "sre": {p: {"success_auc": 0.5, "precision_20": 1.0,
+                                                       "false_tracking": 0, "zero_iou": 0, "frames": 5,
+                                                       "fps": 1.0} for p in SRE_PERTURBATIONS}}}}})
+    assert "sre_carried_spread" not in old.summary("t", ["s"])  # JSON written before the field existed
+
+
 def test_protocol_end_to_end_with_opencv_kcf(tmp_path, sequences_dir):
     src = open_source(sequences_dir / "otb_crossing", max_frames=12)
     first = next(iter(src.frames()))

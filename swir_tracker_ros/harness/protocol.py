@@ -25,10 +25,14 @@ from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.evaluate import Run, make_tracker_factory, run_starts
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
+    auc,
+    carried_truth,
     false_tracking,
     occlusion_episodes,
     occlusions_survived,
+    overlaps,
     score,
+    success_curve,
     zero_overlap,
 )
 from swir_tracker_ros.harness.sources import Source
@@ -51,6 +55,8 @@ class RunStats:
     fps: float  # frames / tracker seconds
     occlusions: int = 0  # occlusion episodes after the start (synthetic sources)
     survived: int = 0  # of those, re-acquired within metrics.RECOVERY_S
+    carried_auc: float | None = None  # AUC against the truth carried by the start box (metrics.carried_truth)
+    floor_auc: float | None = None  # AUC of the carried truth itself: exact tracking of the start's box
 
     @classmethod
     def of(cls, run: Run, fps: float) -> RunStats:
@@ -59,9 +65,15 @@ class RunStats:
         episodes: list[tuple[int, int]] = []
         if any(o is not None for o in run.occlusion):
             episodes = [e for e in occlusion_episodes(run.occlusion, fps) if e[0] > run.init_index]
+        carried = floor = None
+        ref = run.gt[run.init_index] if run.init is not None and run.init_index < len(run.gt) else None
+        if ref is not None:
+            truth = carried_truth(run.init, ref, gt)
+            carried = auc(success_curve(overlaps(run.pred, truth)))
+            floor = auc(success_curve(overlaps(truth, gt)))
         return cls(s.success_auc, s.precision_20, false_tracking(run.states, run.pred, gt),
                    zero_overlap(run.pred, gt), s.frames, s.fps, len(episodes),
-                   occlusions_survived(episodes, run.states, run.pred, gt, fps))
+                   occlusions_survived(episodes, run.states, run.pred, gt, fps), carried, floor)
 
 
 @dataclass(frozen=True)
@@ -133,10 +145,17 @@ class ProtocolResult:
         aucs = [runs[p].success_auc for p in SRE_PERTURBATIONS if p in runs]
         if not aucs:
             return None
-        return {"mean": float(np.mean(aucs)), "min": float(np.min(aucs)), "max": float(np.max(aucs)),
-                "spread": float(np.max(aucs) - np.min(aucs)), "runs": len(aucs),
-                "precision_20": float(np.mean([runs[p].precision_20 for p in SRE_PERTURBATIONS
-                                               if p in runs]))}
+        out = {"mean": float(np.mean(aucs)), "min": float(np.min(aucs)), "max": float(np.max(aucs)),
+               "spread": float(np.max(aucs) - np.min(aucs)), "runs": len(aucs),
+               "precision_20": float(np.mean([runs[p].precision_20 for p in SRE_PERTURBATIONS
+                                              if p in runs]))}
+        for key in ("carried_auc", "floor_auc"):  # absent in JSON written before they existed
+            vals = [getattr(runs[p], key) for p in SRE_PERTURBATIONS if p in runs]
+            if vals and all(v is not None for v in vals):
+                name = key.removesuffix("_auc")
+                out[f"{name}_mean"] = float(np.mean(vals))
+                out[f"{name}_spread"] = float(np.max(vals) - np.min(vals))
+        return out
 
     def summary(self, tracker: str, seqs: Sequence[str]) -> dict:
         """Means over `seqs` (each sequence weighs the same) and sums of frame counts."""
@@ -156,6 +175,9 @@ class ProtocolResult:
             out.update(sre_auc=float(np.mean([v["mean"] for v in sre])),
                        sre_precision_20=float(np.mean([v["precision_20"] for v in sre])),
                        sre_spread=float(np.mean([v["spread"] for v in sre])),
+                       **{f"sre_{name}_{stat}": float(np.mean([v[f"{name}_{stat}"] for v in sre]))
+                          for name in ("carried", "floor") for stat in ("mean", "spread")
+                          if all(f"{name}_{stat}" in v for v in sre)},
                        sre_false_tracking=int(sum(r.false_tracking for r in sre_runs)),
                        sre_zero_iou=int(sum(r.zero_iou for r in sre_runs)),
                        sre_occlusions=int(sum(r.occlusions for r in sre_runs)),
@@ -298,6 +320,9 @@ _MEAN_ROWS = (("OPE mean AUC", "ope_auc", ".3f"), ("OPE mean P@20", "ope_precisi
               ("OPE IoU=0 frames", "ope_zero_iou", "d"),
               ("SRE mean AUC", "sre_auc", ".3f"), ("SRE mean P@20", "sre_precision_20", ".3f"),
               ("SRE spread (max-min, mean)", "sre_spread", ".3f"),
+              ("SRE spread vs the carried start box", "sre_carried_spread", ".3f"),
+              ("SRE AUC vs the carried start box", "sre_carried_mean", ".3f"),
+              ("SRE spread of exact tracking (floor)", "sre_floor_spread", ".3f"),
               ("SRE false tracking (all runs)", "sre_false_tracking", "d"),
               ("SRE IoU=0 frames (all runs)", "sre_zero_iou", "d"), ("fps (OPE, mean)", "fps", ".1f"))
 
