@@ -40,6 +40,8 @@ def _as_box(box: object) -> Box:
     return Box(x, y, w, h)
 
 
+LOOKALIKE_CHECKS = 2  # frames of a departure from the motion reference on which the look-alike guard looks
+LOOKALIKE_GAP = 3.0  # frames: a longer break in the trail ends the look-alike guard's motion reference
 SIZE_RATES = ("vs", "vw", "vh")  # state entries that change the box size (kalman/models.py names)
 CENTRE_RATES = ("vx", "vy", "vxc", "vyc")  # state entries that move the box centre
 
@@ -98,6 +100,7 @@ class Tracker:
         self._clock = 0.0  # frame periods since init
         self._ego = (0.0, 0.0)  # summed ego shifts since init
         self._trail: deque[tuple[float, float, float]] = deque()  # (clock, x - ego x, y - ego y), tracked
+        self._departed = 0  # tracked frames since the box left the look-alike guard's motion reference
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
         self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
         self._refused = 0  # tracked frames the update gate refused since it last passed one
@@ -223,12 +226,18 @@ class Tracker:
         best = max(range(len(dets)), key=lambda i: dets[i].peak * penalty ** abs(i - mid))
         det = dets[best]
         failed = self._failure(det)
+        guard = None
+        if not failed and self._occluded == 0:
+            guard = self._lookalike(img, det, pred, wins, factors)
+            if guard is not None:
+                dets, best, extra = guard
+                det = dets[best]
         # (ours) while re-detecting, a weak peak at the prediction is not the target coming back: keep
         # searching the lattice rather than letting the background next to the occluder steer the filter
         rescan = p.redetect_rescan and not failed and self._occluded > 0 and self._weak(det.peak)
         failed = failed or rescan
         mode = SearchMode.NORMAL
-        shown: tuple[Box, ...] = (wins[mid],)
+        shown: tuple[Box, ...] = (wins[mid],) if guard is None else (wins[mid], extra)
         if failed:
             mode = SearchMode.MULTI_WINDOW
             # Re-detection measures no size (it is taken from the prediction), so nothing could correct
@@ -284,6 +293,8 @@ class Tracker:
             info = kf.update(z, threshold=k)
             if p.variant == "measured":
                 kf.x[:2] = z[:2]  # the confident correlation peak is the centre (no posterior lag)
+        if guard is not None and not rejected:
+            self._back_to_reference()
         if self._noise is not None and not info.coasted:
             kf.R = self._noise.push(z, kf.x, kf.P, kf.H, used=info.used)
         out = model.box_from_state(kf.x)
@@ -432,6 +443,87 @@ class Tracker:
         trail.append((self._clock, self._box.cx - self._ego[0], self._box.cy - self._ego[1]))
         while trail and trail[0][0] < self._clock - n:
             trail.popleft()
+
+    def _motion_reference(self) -> tuple[float, float, float, float] | None:
+        """(ours, look-alike guard) Centre and velocity (image pixels, per frame) that the trail's motion
+        before its last `lookalike_frames` frames gives for now: None without that much unbroken history
+        (a gap of more than LOOKALIKE_GAP frames: an occlusion, whose motion before it is stale)."""
+        m = self.params.lookalike_frames
+        trail = list(self._trail)
+        if not trail or self._clock - trail[-1][0] > LOOKALIKE_GAP:
+            return None
+        start = next((i for i in range(len(trail) - 1, 0, -1)
+                      if trail[i][0] - trail[i - 1][0] > LOOKALIKE_GAP), 0)
+        old = [e for e in trail[start:] if e[0] <= self._clock - m]
+        if len(old) < 2 or old[-1][0] - old[0][0] < m:
+            return None
+        (t0, x0, y0), (t1, x1, y1) = old[0], old[-1]
+        vx, vy = (x1 - x0) / (t1 - t0), (y1 - y0) / (t1 - t0)
+        dt = self._clock - t1
+        return x1 + vx * dt + self._ego[0], y1 + vy * dt + self._ego[1], vx, vy
+
+    def _lookalike(self, img: np.ndarray, det: Detection, pred: Box, wins: list[Box],
+                   factors: tuple[float, ...]) -> tuple[list[Detection], int, Box] | None:
+        """(ours, variant measured) Look-alike guard of a tracked frame.
+
+        A same-looking object that passes in front of the target covers it and takes the correlation peak
+        along; every frame's step is small and confident, so neither the failure test, the Kalman gate
+        nor the memory notices. The motion does: the peak leaves where the trail's earlier motion puts
+        the target (`_motion_reference`). When it is further than `lookalike_distance` from there, one
+        more window is correlated at the reference; its peak wins when it lies near the reference and
+        apart from the first, at `lookalike_ratio` of its height or more, and passes the re-acquisition
+        bars (`redetect_peak_ratio`, `redetect_psr`): a distractor-aware choice by motion, as multi-target
+        trackers gate by a motion model, the motion being the one from before the mix-up. A fast skater
+        whose turn the reference cannot know leaves background there, with PSRs of 5-10 (OTB skating1).
+        Only the first LOOKALIKE_CHECKS frames of a departure are checked: when a look-alike takes the
+        box away, the target is at the reference the moment the box leaves it; when nothing is there
+        then, the target moved off the reference itself, and the reference, extrapolated on, would only
+        pass over background (a stage light took a skater's box 10 frames into her start: OTB skating1
+        from the 0.8 start, measured).
+        Returns the detections of the windows plus that one, the index of the winner and the window; None
+        when the guard is off, not triggered or the first peak stays.
+        """
+        p = self.params
+        if p.variant != "measured" or p.lookalike_frames <= 0:
+            return None
+        ref = self._motion_reference()
+        if ref is None:
+            self._departed = 0
+            return None
+        rx, ry, _, _ = ref
+        w, h = pred.w * det.scale, pred.h * det.scale
+        d = p.lookalike_distance
+
+        def apart(ax: float, ay: float, bx: float, by: float) -> float:
+            return max(abs(ax - bx) / w, abs(ay - by) / h)
+
+        if apart(det.cx, det.cy, rx, ry) <= d:
+            self._departed = 0
+            return None
+        self._departed += 1
+        if self._departed > LOOKALIKE_CHECKS:  # the target moved off the reference itself (see above)
+            return None
+        extra = scale_windows(rx, ry, pred.w, pred.h, self._bank.padding, (1.0,))[0]
+        dets = self._bank.detect(img, [*wins, extra], [*factors, 1.0])
+        alt = dets[-1]
+        # taking the box back is a re-acquisition: the peak there also passes its bars (peak, PSR)
+        if (apart(alt.cx, alt.cy, rx, ry) <= d / 2 and apart(alt.cx, alt.cy, det.cx, det.cy) >= d / 2
+                and alt.peak >= p.lookalike_ratio * det.peak and not self._failure(alt)
+                and not self._weak(alt.peak) and not self._low_psr(alt.psr)):
+            return dets, len(dets) - 1, extra
+        return None
+
+    def _back_to_reference(self) -> None:
+        """(ours, look-alike guard) After the guard moved the box back: the trail forgets the frames that
+        followed the look-alike and the centre velocity is the reference motion's."""
+        m = self.params.lookalike_frames
+        ref = self._motion_reference()
+        self._departed = 0
+        while self._trail and self._trail[-1][0] > self._clock - m:
+            self._trail.pop()
+        if ref is not None:
+            vx, vy = self._centre_rates[:2]
+            self._kf.x[vx], self._kf.x[vy] = ref[2], ref[3]
 
     def _set_coast_velocity(self) -> None:
         """(ours, `coast_velocity_window`) The centre velocity for re-detection: the trail's mean velocity."""

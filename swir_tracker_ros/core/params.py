@@ -206,6 +206,33 @@ class TrackerParams:
         0,
         100000,
     )
+    lookalike_frames: int = _f(
+        12,
+        "(ours, variant measured) look-alike guard: a tracked peak further than lookalike_distance from "
+        "where the trail's motion before its last lookalike_frames frames puts the target (ego shifts "
+        "removed) also has a window correlated there; a peak in that window, near that reference and "
+        "apart from the first, of at least lookalike_ratio x the first peak is the target, and the frames "
+        "since the reference are dropped from the trail (a same-looking pedestrian passing in front took "
+        "the box along: demo_crossing; docs/tracking_core.md, tenth pass); 0: off. The trail is "
+        "coast_velocity_window long",
+        0,
+        1000,
+    )
+    lookalike_distance: float = _f(
+        0.5,
+        "(ours, variant measured) look-alike guard: the distance from the motion reference, in box widths "
+        "and heights (the larger), beyond which a tracked peak is checked; the second peak must lie within "
+        "half of it from the reference and at least half of it from the first peak",
+        0.05,
+        5.0,
+    )
+    lookalike_ratio: float = _f(
+        0.8,
+        "(ours, variant measured) look-alike guard: the peak at the motion reference wins at this ratio "
+        "of the peak that left it (the motion is the tie-break between two targets that look alike)",
+        0.1,
+        2.0,
+    )
     rejected_update: str = _f(
         "memory",
         "(ours, variant measured) Kalman update of a non-failed frame that is not accepted as `tracking` "

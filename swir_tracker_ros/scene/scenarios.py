@@ -196,6 +196,14 @@ def _low_contrast(seed: int) -> World:
                   SensorModel(contrast=0.5, noise=0.012, interlaced=True), contrast=0.6)
 
 
+def _lookalike(seed: int) -> World:
+    # The demo_crossing world (its first 8 s): a pedestrian of the target's look and size, 3 m nearer,
+    # strolls the other way and passes in front of it at ~5 s, covering up to 70 % of it for ~0.4 s.
+    from swir_tracker_ros.scene.demo_scene import demo_world  # demo_scene builds on this module
+
+    return demo_world(seed, variant="demo_crossing")
+
+
 def scenarios() -> dict[str, ScenarioSpec]:
     """The harness scenarios by name (t1..t9 = paper 000 Table 1 rows 1-9)."""
     specs = [
@@ -222,6 +230,9 @@ def scenarios() -> dict[str, ScenarioSpec]:
                      _control, hfov_deg=11.0),
         ScenarioSpec("x_low_contrast_interlaced", "very low contrast, interlaced, long full static occlusion",
                      None, 14.0, _low_contrast, hfov_deg=11.0),
+        ScenarioSpec("x_lookalike_crossing", "a pedestrian of the target's look crosses in front of it the "
+                     "other way (the box must not leave with it); panning camera", None, 8.0, _lookalike,
+                     camera="follow", default_seed=4),
     ]
     return {s.name: s for s in specs}
 
