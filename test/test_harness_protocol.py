@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import pytest
 
@@ -144,6 +145,15 @@ needs_bench = pytest.mark.skipif(not (BENCH / ".installed").exists(),
 
 
 @needs_bench
+def test_pixel_style_moves_the_start_box_by_a_pixel():
+    boxes = sre_boxes(Box(100, 50, 40, 80), 640, 480, style="pixel")
+    assert boxes["left"].as_tuple() == (99, 50, 40, 80)
+    assert boxes["bottom_right"].as_tuple() == (101, 51, 40, 80)
+    assert boxes["scale_0.8"].as_tuple() == (101, 51, 38, 78)
+    assert boxes["scale_1.1"].as_tuple() == (99.5, 49.5, 41, 81)
+    assert all(b.center_distance(Box(100, 50, 40, 80)) <= math.sqrt(2) for b in boxes.values())
+
+
 def test_carried_truth_keeps_the_start_offset_and_scale():
     ref = Box(100, 50, 40, 80)
     start = sre_box(ref, "scale_0.8", 640, 480)  # (104, 58, 32, 64)

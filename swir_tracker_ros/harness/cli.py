@@ -12,6 +12,7 @@ from pathlib import Path
 from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.bagio import FrameRecord, bag_info, write_bag
 from swir_tracker_ros.harness.evaluate import VARIANTS, EvalResult, evaluate, format_table
+from swir_tracker_ros.harness.metrics import SRE_STYLES
 from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, convert_bits, open_source
 
 DEFAULT_PEER_CACHE = str(Path.home() / ".cache" / "swir_tracker_ros" / "peers")
@@ -300,8 +301,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="issue-12 protocol: OPE and/or SRE (12 perturbed starts), false tracking, occlusions "
                         "survived; our runs and peers on the same frames (docs/harness.md)")
     p.add_argument("--jobs", type=int, default=1, help="--protocol: parallel (tracker, source) tasks")
-    p.add_argument("--sre-style", choices=("otb", "shift"), default="otb",
-                   help="SRE start boxes: the OTB toolkit's shiftInitBB (otb) or rigid 10 %% shifts (shift)")
+    p.add_argument("--sre-style", choices=SRE_STYLES, default="otb",
+                   help="SRE start boxes: the OTB toolkit's shiftInitBB (otb), rigid 10 %% shifts (shift), "
+                        "or the same 12 starts 1 px apart (pixel: the answer's stability; metrics.sre_box)")
     p.add_argument("--peer-cache", default=None,
                    help="--protocol: OpenCV results cache (default: $SWIR_PEER_CACHE or "
                         f"{DEFAULT_PEER_CACHE})")

@@ -124,7 +124,8 @@ def mean_scores(scores: Sequence[Score]) -> Score:
 
 SRE_PERTURBATIONS = ("left", "right", "up", "down", "top_left", "top_right", "bottom_left", "bottom_right",
                      "scale_0.8", "scale_0.9", "scale_1.1", "scale_1.2")
-SRE_STYLES = ("otb", "shift")
+SRE_STYLES = ("otb", "shift", "pixel")
+PIXEL_SIZE_STEPS = {"scale_0.8": -2, "scale_0.9": -1, "scale_1.1": 1, "scale_1.2": 2}  # style "pixel", px
 SRE_SHIFT = 0.1  # shift: 10 % of the target's width / height (Wu et al., CVPR 2013, sec. 3.2)
 _DIRECTIONS = {"left": (-1, 0), "right": (1, 0), "up": (0, -1), "down": (0, 1), "top_left": (-1, -1),
                "top_right": (1, -1), "bottom_left": (-1, 1), "bottom_right": (1, 1)}
@@ -146,13 +147,25 @@ def sre_box(box: Box, perturbation: str, width: int, height: int, style: str = "
     by ceil(0.1 w) / ceil(0.1 h); the 4 corner shifts move ONE corner outwards by round(0.1 w), round(0.1 h)
     with the opposite corner fixed (the box grows by ~10 % per axis); the scales keep the centre and round
     x, y, w, h. style "shift" reads the paper literally: the whole box moves by (+-0.1 w, +-0.1 h) in 8
-    directions, without rounding. Both clip as the toolkit does: a negative x or y becomes 0 with the size
+    directions, without rounding. style "pixel" (ours) asks whether the tracker gives the same answer when
+    the start box moves by a pixel: the 8 directions move it by 1 px, and the 4 scales change its width and
+    height by -2, -1, +1, +2 px about its centre (`PIXEL_SIZE_STEPS`); a stable tracker's spread is then
+    close to 0. All styles clip as the toolkit does: a negative x or y becomes 0 with the size
     kept (the box moves), then a box reaching past the right or bottom edge is cut there.
     """
     if style not in SRE_STYLES:
         raise HarnessError(f"SRE style {style!r}; choose from {', '.join(SRE_STYLES)}")
     x, y, w, h = box.as_tuple()
-    if perturbation.startswith("scale_"):
+    if style == "pixel" and perturbation != "none":
+        if perturbation in _DIRECTIONS:
+            sx, sy = _DIRECTIONS[perturbation]
+            x, y = x + sx, y + sy
+        elif perturbation in PIXEL_SIZE_STEPS:
+            d = PIXEL_SIZE_STEPS[perturbation]
+            x, y, w, h = x - d / 2.0, y - d / 2.0, w + d, h + d
+        else:
+            raise HarnessError(f"unknown SRE perturbation {perturbation!r}")
+    elif perturbation.startswith("scale_"):
         r = float(perturbation.removeprefix("scale_"))
         cx, cy = x + w / 2.0, y + h / 2.0
         nw, nh = r * w, r * h
