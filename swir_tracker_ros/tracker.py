@@ -480,11 +480,16 @@ class Tracker:
         then, the target moved off the reference itself, and the reference, extrapolated on, would only
         pass over background (a stage light took a skater's box 10 frames into her start: OTB skating1
         from the 0.8 start, measured).
+        Filters with `psr_reacquisition` only (KCF), as the PSR bar: DCF-CA's failure test keeps a running
+        APCE mean that a second call would move. The extra detection (all windows again, so that the
+        winner's index still names its features) costs one more frame's search on at most
+        LOOKALIKE_CHECKS frames per departure.
         Returns the detections of the windows plus that one, the index of the winner and the window; None
         when the guard is off, not triggered or the first peak stays.
         """
         p = self.params
-        if p.variant != "measured" or p.lookalike_frames <= 0:
+        # filters with the PSR bar for re-acquisition (KCF): their failure test has no state to disturb
+        if p.variant != "measured" or p.lookalike_frames <= 0 or not self._bank.psr_reacquisition:
             return None
         ref = self._motion_reference()
         if ref is None:

@@ -213,8 +213,8 @@ class TrackerParams:
         "removed) also has a window correlated there; a peak in that window, near that reference and "
         "apart from the first, of at least lookalike_ratio x the first peak is the target, and the frames "
         "since the reference are dropped from the trail (a same-looking pedestrian passing in front took "
-        "the box along: demo_crossing; docs/tracking_core.md, tenth pass); 0: off. The trail is "
-        "coast_velocity_window long",
+        "the box along: demo_crossing; docs/tracking_core.md, tenth pass); pipeline kcf only; 0: off. The "
+        "trail is coast_velocity_window long",
         0,
         1000,
     )
