@@ -230,7 +230,7 @@ class Tracker:
         if not failed and self._occluded == 0:
             guard = self._lookalike(img, det, pred, wins, factors)
             if guard is not None:
-                dets, best, extra = guard
+                dets, best, extra, ref_velocity = guard
                 det = dets[best]
         # (ours) while re-detecting, a weak peak at the prediction is not the target coming back: keep
         # searching the lattice rather than letting the background next to the occluder steer the filter
@@ -294,7 +294,7 @@ class Tracker:
             if p.variant == "measured":
                 kf.x[:2] = z[:2]  # the confident correlation peak is the centre (no posterior lag)
         if guard is not None and not rejected:
-            self._back_to_reference()
+            self._back_to_reference(ref_velocity)
         if self._noise is not None and not info.coasted:
             kf.R = self._noise.push(z, kf.x, kf.P, kf.H, used=info.used)
         out = model.box_from_state(kf.x)
@@ -462,8 +462,9 @@ class Tracker:
         dt = self._clock - t1
         return x1 + vx * dt + self._ego[0], y1 + vy * dt + self._ego[1], vx, vy
 
-    def _lookalike(self, img: np.ndarray, det: Detection, pred: Box, wins: list[Box],
-                   factors: tuple[float, ...]) -> tuple[list[Detection], int, Box] | None:
+    def _lookalike(
+        self, img: np.ndarray, det: Detection, pred: Box, wins: list[Box], factors: tuple[float, ...]
+    ) -> tuple[list[Detection], int, Box, tuple[float, float]] | None:
         """(ours, variant measured) Look-alike guard of a tracked frame.
 
         A same-looking object that passes in front of the target covers it and takes the correlation peak
@@ -484,8 +485,8 @@ class Tracker:
         APCE mean that a second call would move. The extra detection (all windows again, so that the
         winner's index still names its features) costs one more frame's search on at most
         LOOKALIKE_CHECKS frames per departure.
-        Returns the detections of the windows plus that one, the index of the winner and the window; None
-        when the guard is off, not triggered or the first peak stays.
+        Returns the detections of the windows plus that one, the index of the winner, the window and the
+        reference's velocity; None when the guard is off, not triggered or the first peak stays.
         """
         p = self.params
         # filters with the PSR bar for re-acquisition (KCF): their failure test has no state to disturb
@@ -495,7 +496,7 @@ class Tracker:
         if ref is None:
             self._departed = 0
             return None
-        rx, ry, _, _ = ref
+        rx, ry, vx, vy = ref
         w, h = pred.w * det.scale, pred.h * det.scale
         d = p.lookalike_distance
 
@@ -515,20 +516,18 @@ class Tracker:
         if (apart(alt.cx, alt.cy, rx, ry) <= d / 2 and apart(alt.cx, alt.cy, det.cx, det.cy) >= d / 2
                 and alt.peak >= p.lookalike_ratio * det.peak and not self._failure(alt)
                 and not self._weak(alt.peak) and not self._low_psr(alt.psr)):
-            return dets, len(dets) - 1, extra
+            return dets, len(dets) - 1, extra, (vx, vy)
         return None
 
-    def _back_to_reference(self) -> None:
+    def _back_to_reference(self, velocity: tuple[float, float]) -> None:
         """(ours, look-alike guard) After the guard moved the box back: the trail forgets the frames that
-        followed the look-alike and the centre velocity is the reference motion's."""
+        followed the look-alike and the centre velocity is the reference motion's (`velocity`)."""
         m = self.params.lookalike_frames
-        ref = self._motion_reference()
         self._departed = 0
         while self._trail and self._trail[-1][0] > self._clock - m:
             self._trail.pop()
-        if ref is not None:
-            vx, vy = self._centre_rates[:2]
-            self._kf.x[vx], self._kf.x[vy] = ref[2], ref[3]
+        vx, vy = self._centre_rates[:2]
+        self._kf.x[vx], self._kf.x[vy] = velocity
 
     def _set_coast_velocity(self) -> None:
         """(ours, `coast_velocity_window`) The centre velocity for re-detection: the trail's mean velocity."""
