@@ -220,10 +220,12 @@ class Tracker:
         pred = self._clamp_size(pred)
         factors = self._scale_factors()
         wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
-        dets = bank.detect(img, wins, factors)
-        mid = len(dets) // 2
         penalty = p.scale_penalty if p.variant == "measured" else 1.0
-        best = max(range(len(dets)), key=lambda i: dets[i].peak * penalty ** abs(i - mid))
+        climb = p.scale_climb and p.variant == "measured" and self._occluded == 0
+        floor = p.scale_climb_ratio * self._peak_sum / self._peak_n if self._peak_n else math.inf
+        dets, best, lo = bank.detect_scales(img, wins, factors, penalty, climb, floor)
+        mid = len(wins) // 2 - lo  # below: the run of windows correlated
+        wins, factors = wins[lo : lo + len(dets)], factors[lo : lo + len(dets)]
         det = dets[best]
         failed = self._failure(det)
         guard = None

@@ -7,6 +7,7 @@ the true scale change is known exactly.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import cv2
@@ -117,3 +118,63 @@ def test_interpolated_response_measures_changes_below_one_step(sequences_dir: Pa
         f = fine.estimate(zoomed, box.cx, box.cy, box.w, box.h)
         assert min(abs(np.log(c) - k * np.log(1.02)) for k in (-1, 0, 1)) < 1e-9  # a whole step
         assert abs(np.log(f / z)) < 0.5 * np.log(1.02) and abs(np.log(f / z)) < abs(np.log(c / z)), (z, c, f)
+
+
+@pytest.mark.parametrize("seq", ["otb_walking2", "vottir2015_horse"])
+def test_the_scale_climb_picks_what_the_full_search_picks(sequences_dir: Path, seq: str) -> None:
+    """`scale_climb`: the 3 middle windows, then outward while the edge wins, and every window when the best
+    peak is below the floor. On a real target zoomed in and out (the best window at both ends and in the
+    middle), the same winner, peak and memory score as the full search, from fewer windows when the
+    predicted size is right."""
+    img, box = real_frame(sequences_dir, seq, 10)
+    trk = Tracker(TrackerParams())
+    trk.init(img, box)
+    bank, p = trk._bank, trk.params
+    factors = p.scale_factors()
+    counted: list[int] = []
+    orig = bank.features
+    bank.features = lambda im, wins: counted.append(len(wins)) or orig(im, wins)  # type: ignore[method-assign]
+    picked = set()
+    for z in (0.86, 0.9, 0.95, 1.0, 1.05, 1.11, 1.16):
+        frame = zoom(img, box.cx, box.cy, z)
+        wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in factors]
+        full, best, first = bank.detect_scales(frame, wins, factors, p.scale_penalty, climb=False)
+        assert first == 0 and len(full) == 5
+        full_memory = bank.memory_score(best)
+        counted.clear()
+        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale_penalty, climb=True)
+        assert lo + b == best, z
+        for d, f in zip(dets, full[lo : lo + len(dets)]):  # float32 sums of other batch sizes: rounding
+            assert d.window == f.window and d.peak == pytest.approx(f.peak, rel=1e-4)
+            assert (d.cx, d.cy) == pytest.approx((f.cx, f.cy), abs=1e-3)
+        assert bank.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
+        assert sum(counted) == len(dets) < 5 or best in (0, 4), (z, counted)
+        # a best peak below the floor (a frame unlike the tracked ones): every window, the full search's pick
+        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale_penalty, climb=True, floor=math.inf)
+        assert (len(dets), lo, b) == (5, 0, best) and [d.window for d in dets] == wins
+        assert bank.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
+        picked.add(best)
+    assert {0, 2, 4} <= picked  # the zooms moved the winner to both ends
+
+
+def test_the_scale_climb_tracks_a_real_sequence_as_the_full_search(sequences_dir: Path) -> None:
+    """Whole tracker, OTB crossing (a walker who grows): the same per-frame results with the climb on
+    and off up to float32 rounding (batches of other sizes sum in another order), with ~3.5 windows a
+    frame instead of 5 in normal mode."""
+    pngs = sorted((sequences_dir / "otb_crossing").glob("*.png"))
+    gt = Box(*map(float, (sequences_dir / "otb_crossing" / "gt.txt").read_text().split()[0].split(",")))
+    frames = [cv2.imread(str(f), cv2.IMREAD_GRAYSCALE) for f in pngs]
+    results, windows = {}, {}
+    for climb in (True, False):
+        trk = Tracker(TrackerParams(scale_climb=climb))
+        trk.init(frames[0], gt)
+        n = [0]
+        orig = trk._bank.features
+        trk._bank.features = lambda im, w, o=orig, n=n: n.__setitem__(0, n[0] + len(w)) or o(im, w)  # type: ignore[method-assign]
+        results[climb] = [trk.update(f) for f in frames[1:]]
+        windows[climb] = n[0] / (len(frames) - 1)
+    for a, b in zip(results[True], results[False]):
+        assert a.state == b.state and a.search_mode == b.search_mode
+        assert np.allclose(a.box.as_tuple(), b.box.as_tuple(), atol=0.05), (a.box, b.box)
+    # feature maps a frame: 5 scale windows + the training window, against ~3.5 + the same training window
+    assert windows[False] >= 6.0 and windows[False] - windows[True] > 1.2, windows

@@ -220,9 +220,9 @@ def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
 
 
 def test_the_papers_variants_ignore_the_ninth_pass_rules() -> None:
-    """`redetect_psr`, `size_rate_peak_ratio` and the look-alike guard are rules of variant `measured`: the
-    papers' pipelines (here `robust_adaptive`, paper 000) give the same boxes and states whatever their
-    values."""
+    """`redetect_psr`, `size_rate_peak_ratio`, the look-alike guard and the scale climb are rules of variant
+    `measured`: the papers' pipelines (here `robust_adaptive`, paper 000) give the same boxes and states
+    whatever their values."""
     src = open_source("synth:t1_full_static_size")
 
     def run(**kw: float) -> tuple[list, list]:
@@ -230,5 +230,5 @@ def test_the_papers_variants_ignore_the_ninth_pass_rules() -> None:
         r = run_starts(src, factory, starts=("left",))["left"]
         return r.pred, r.states
 
-    assert run(redetect_psr=0.0, size_rate_peak_ratio=0.0, lookalike_frames=0) == run(
-        redetect_psr=50.0, size_rate_peak_ratio=2.0, lookalike_frames=30)
+    assert run(redetect_psr=0.0, size_rate_peak_ratio=0.0, lookalike_frames=0, scale_climb=False) == run(
+        redetect_psr=50.0, size_rate_peak_ratio=2.0, lookalike_frames=30, scale_climb=True)

@@ -304,9 +304,59 @@ class BaseFilter(ABC):
         if self.scale_filter is not None and len(windows) > 1:
             return self._detect_dsst(img, windows, scales)
         feats = self.features(img, windows)
-        self._last_features = feats  # for `memory_score` of the winner (no second feature computation)
+        # for `memory_score` of the winner (no second feature computation): window i is feats[i]
+        self._last_maps = [(feats, i) for i in range(len(windows))]
         responses = self.filter.respond(feats)
         return self._detections(responses, windows, scales if scales is not None else [1.0] * len(windows))
+
+    def detect_scales(
+        self,
+        img: np.ndarray,
+        windows: Sequence[Box],
+        scales: Sequence[float],
+        penalty: float,
+        climb: bool,
+        floor: float = 0.0,
+    ) -> tuple[list[Detection], int, int]:
+        """The scale search at the prediction: (detections, best, first) for the windows `windows` (sizes
+        `scales`, the predicted size in the middle). The detections are those of windows[first:first +
+        len(detections)], the windows correlated; `best` indexes them: the largest peak x penalty^|k|, k
+        steps from the middle window, the first of equals.
+
+        `climb` (ours, `scale_climb`): the middle three windows are correlated, then one more outward at a
+        time while the outermost one correlated is the best, as long as there are windows left on that
+        side. When the best peak found so far is below `floor`, the remaining windows are correlated too (a
+        frame unlike the tracked ones: the peaks over scale need not be unimodal there). The penalty makes
+        the search unimodal around the predicted size on most frames (docs/speed.md).
+        """
+        n, mid = len(windows), len(windows) // 2
+
+        def best_of(dets: Sequence[Detection], centre: int) -> int:
+            return max(range(len(dets)), key=lambda i: dets[i].peak * penalty ** abs(i - centre))
+
+        if not climb or n <= 3 or self.scale_filter is not None:
+            dets = self.detect(img, windows, scales)
+            return dets, best_of(dets, mid), 0
+        lo, hi = mid - 1, mid + 1
+        dets = self.detect(img, windows[lo : hi + 1], scales[lo : hi + 1])
+        maps = list(self._last_maps)
+        best = best_of(dets, 1)
+        while (best == 0 and lo > 0) or (best == len(dets) - 1 and hi < n - 1):
+            k = lo - 1 if best == 0 else hi + 1
+            new = self.detect(img, [windows[k]], [scales[k]])[0]
+            if k < lo:
+                lo, dets, maps = k, [new, *dets], [*self._last_maps, *maps]
+            else:
+                hi, dets, maps = k, [*dets, new], [*maps, *self._last_maps]
+            best = best_of(dets, mid - lo)
+        if dets[best].peak < floor and (lo > 0 or hi < n - 1):
+            rest = [*range(lo), *range(hi + 1, n)]
+            more = self.detect(img, [windows[k] for k in rest], [scales[k] for k in rest])
+            extra = self._last_maps
+            dets, maps = [*more[:lo], *dets, *more[lo:]], [*extra[:lo], *maps, *extra[lo:]]
+            lo, best = 0, best_of(dets, mid)
+        self._last_maps = maps
+        return dets, best, lo
 
     def lattice_geometry(
         self,
@@ -401,7 +451,7 @@ class BaseFilter(ABC):
         base = scales[mid] if scales is not None else 1.0
         win = windows[mid]
         feats = self.features(img, [win])
-        self._last_features = np.broadcast_to(feats, (len(windows), *feats.shape[1:]))
+        self._last_maps = [(feats, 0)] * len(windows)
         det = self._detections(self.filter.respond(feats), [win], [base])[0]
         if self.scale_filter is not None and self.scale_filter.trained:
             k = 1.0 + self.padding  # the window is (1 + padding) x the target
@@ -430,9 +480,10 @@ class BaseFilter(ABC):
 
     def memory_score(self, index: int) -> float:
         """Peak of the memory filter's response on window `index` of the last `detect` call."""
-        z = self._last_features[index : index + 1]
+        batch, j = self._last_maps[index]
+        z = batch[j : j + 1]
         spectrum = getattr(self.filter, "spectrum", None)  # KCF: the FFT of `detect`, not a second one
-        zf = spectrum(self._last_features, index) if spectrum is not None else None
+        zf = spectrum(batch, j) if spectrum is not None else None
         resp = (self.memory.respond(z) if zf is None else self.memory.respond_spectra(z, zf))[0]
         return float(resp.max()) * self.gain
 

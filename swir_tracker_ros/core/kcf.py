@@ -115,6 +115,7 @@ _CHUNK_BYTES = 1 << 20  # spectra of this many bytes a chunk stay in a core's L2
 
 
 _KEEP_SPECTRA = 9  # `KCF.respond` keeps the spectra of batches up to this size (normal mode: 1-5 windows)
+_KEPT_BATCHES = 3  # ... of the last this many such batches (the scale climb correlates up to 3 per frame)
 
 
 def _chunked_cross_spectrum(
@@ -160,7 +161,8 @@ class KCF:
         self.model_x: np.ndarray | None = None
         self.model_xf: np.ndarray | None = None
         self.model_alphaf: np.ndarray | None = None
-        self._spectra: tuple[np.ndarray, list[np.ndarray], int] | None = None  # last batch, its FFT chunks
+        # the last batches (each with its FFT chunks and chunk length), most recent last
+        self._spectra: list[tuple[np.ndarray, list[np.ndarray], int]] = []
         # (model_x, d, basis P, spectrum of P'x) of the last `projection` call
         self._projection: tuple[np.ndarray, int, np.ndarray, np.ndarray] | None = None
 
@@ -169,14 +171,15 @@ class KCF:
         return self.model_alphaf is not None
 
     def spectrum(self, z: np.ndarray, index: int) -> np.ndarray | None:
-        """rfft2 of window `index` of the batch `z` (1, C, rows, cols//2+1) if `z` is the batch of the last
-        `respond` call and its spectra were kept (compiled path, at most `_KEEP_SPECTRA` windows); else
-        None. Lets the long-term memory score the winning window without a second FFT (BaseFilter)."""
-        kept = self._spectra
-        if kept is None or kept[0] is not z:
-            return None
-        chunk, step = kept[1][index // kept[2]], kept[2]
-        return chunk[index % step : index % step + 1]
+        """rfft2 of window `index` of the batch `z` (1, C, rows, cols//2+1) if `z` is one of the batches of
+        the last `_KEPT_BATCHES` `respond` calls whose spectra were kept (compiled path, at most
+        `_KEEP_SPECTRA` windows); else None. Lets the long-term memory score the winning window without a
+        second FFT (BaseFilter)."""
+        for batch, chunks, step in reversed(self._spectra):
+            if batch is z:
+                chunk = chunks[index // step]
+                return chunk[index % step : index % step + 1]
+        return None
 
     def sample(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(xf, alphaf) of the training sample x: its spectrum and the dual coefficients of eq. 6 learnt
@@ -248,7 +251,9 @@ class KCF:
                 keep = len(z) <= _KEEP_SPECTRA
                 zc = np.ascontiguousarray(z)
                 cross, chunks = _chunked_cross_spectrum(zc, xf, cj.cross_spectrum_kernel, keep)
-                self._spectra = (z, chunks, len(chunks[0])) if keep and chunks else None
+                if keep and chunks:  # a reused buffer (the lattice's) is kept once, with its new spectra
+                    kept = [k for k in self._spectra if k[0] is not z][1 - _KEPT_BATCHES :]
+                    self._spectra = [*kept, (z, chunks, len(chunks[0]))]
             else:
                 cross = np.empty((zf.shape[0], *zf.shape[2:]), dtype=np.complex64)
                 cj.cross_spectrum_kernel(np.ascontiguousarray(zf), xf, cross)

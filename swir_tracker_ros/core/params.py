@@ -64,6 +64,20 @@ class TrackerParams:
         0.5,
         1.0,
     )
+    scale_climb: bool = _f(
+        True,
+        "(ours, variant measured) normal mode correlates the 3 middle scale samples and goes outward one at "
+        "a time only while the outermost one is the best (penalised peaks): the same pick as the full "
+        "search on all but a few frames, at 3-3.6 windows a frame instead of 5 (docs/speed.md); off (and "
+        "the papers' variants, and while re-detecting): every sample",
+    )
+    scale_climb_ratio: float = _f(
+        0.9,
+        "(ours, scale_climb) a frame whose best peak of the climb is below this x the mean peak of the "
+        "tracked frames (and every frame before the first tracked one) correlates every scale sample",
+        0.0,
+        2.0,
+    )
     large_target_halving: float = _f(
         100.0,
         "model works at half resolution when sqrt(w h) >= this many pixels (KCF reference); 0 disables",
