@@ -484,9 +484,9 @@ class Tracker:
         pass over background (a stage light took a skater's box 10 frames into her start: OTB skating1
         from the 0.8 start, measured).
         Filters with `psr_reacquisition` only (KCF), as the PSR bar: DCF-CA's failure test keeps a running
-        APCE mean that a second call would move. The extra detection (all windows again, so that the
-        winner's index still names its features) costs one more frame's search on at most
-        LOOKALIKE_CHECKS frames per departure.
+        APCE mean that a second call would move. The extra detection (the windows the scale search
+        correlated, again, so that the winner's index still names its features) costs one more frame's
+        search on at most LOOKALIKE_CHECKS frames per departure.
         Returns the detections of the windows plus that one, the index of the winner, the window and the
         reference's velocity; None when the guard is off, not triggered or the first peak stays.
         """
