@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections import deque
 from collections.abc import Callable
@@ -106,6 +107,7 @@ class Tracker:
         self._refused = 0  # tracked frames the update gate refused since it last passed one
         self._memory = False
         self._lattice = False
+        self._sweep = 0  # tiles of the long-loss sweep searched so far (`sweep_after`)
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -214,9 +216,11 @@ class Tracker:
         pred = model.box_from_state(kf.x)
         ih, iw = img.shape
         if not pred.is_valid() or not pred.intersects_image(iw, ih):
-            self._state = TrackState.LOST
-            self._box = pred if pred.is_finite() else self._box
-            return self._result(self._box, TrackState.LOST)
+            if not (pred.is_valid() and self._hold_in_image(iw, ih)):
+                self._state = TrackState.LOST
+                self._box = pred if pred.is_finite() else self._box
+                return self._result(self._box, TrackState.LOST)
+            pred = model.box_from_state(kf.x)
         pred = self._clamp_size(pred)
         factors = self._scale_factors()
         wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
@@ -276,16 +280,25 @@ class Tracker:
         meas = Box.from_center(det.cx, det.cy, *size)
         k = self._threshold(det.peak)
         z = model.measurement_from_box(meas)
-        if failed:  # the winner may still be a window at the prediction (the normal-mode search)
-            outer = not any(det is d for d in dets)
-            info = self._redetection_update(z, k, det.peak, outer)
         rejected, learn, weak = False, False, False
         if not failed:
             # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
             weak = rejected = self._occluded > 0 and (self._weak(det.peak) or self._low_psr(det.psr))
             if not rejected:
                 rejected, learn = self._memory_verdict(best)
-        if rejected and self._rejected_held(weak, best):
+        jump = self._sweep_tile(img, pred, wins[mid], det) if failed or rejected else None
+        if jump is not None:  # (ours) the sweep found the target away from the prediction: start there
+            det, mode, shown = jump[0], SearchMode.MULTI_WINDOW, (*shown, jump[1])
+            k = self._threshold(det.peak)
+            z = model.measurement_from_box(Box.from_center(det.cx, det.cy, *jump[2]))
+            info = kf.update(None, threshold=k)  # no innovation: the jump is not a measurement error
+            kf.x[:4] = z
+            kf.x[self._centre_rates] = 0.0
+            kf.x[self._size_rates] = 0.0
+        elif failed:  # the winner may still be a window at the prediction (the normal-mode search)
+            outer = not any(det is d for d in dets)
+            info = self._redetection_update(z, k, det.peak, outer)
+        elif rejected and self._rejected_held(weak, best):
             # (ours) a frame that is not `tracking` does not steer the state like a confident one
             if p.rejected_update == "coast":
                 info = kf.update(None, threshold=k)
@@ -530,6 +543,81 @@ class Tracker:
             self._trail.pop()
         vx, vy = self._centre_rates[:2]
         self._kf.x[vx], self._kf.x[vy] = velocity
+
+    def _sweeping(self) -> bool:
+        """Is the long-loss sweep on (`sweep_after`; variant measured, filters with the PSR bar: KCF)?"""
+        p = self.params
+        return self._lattice and p.sweep_after > 0 and self._bank.psr_reacquisition
+
+    def _hold_in_image(self, iw: int, ih: int) -> bool:
+        """(ours, `sweep_after`) While re-detecting, a prediction that left the image is held at its border
+        (centre clamped, centre velocity zeroed) instead of ending the track: the target may have turned
+        back while hidden, and the sweep searches the whole image. False (the track ends) otherwise."""
+        if not (self._sweeping() and self._occluded > 0):
+            return False
+        kf = self._kf
+        kf.x[0] = min(max(float(kf.x[0]), 0.0), iw - 1.0)
+        kf.x[1] = min(max(float(kf.x[1]), 0.0), ih - 1.0)
+        kf.x[self._centre_rates] = 0.0
+        return True
+
+    def _sweep_tile(
+        self, img: np.ndarray, pred: Box, window: Box, best: Detection
+    ) -> tuple[Detection, Box, tuple[float, float]] | None:
+        """(ours, `sweep_after`) One tile of the long-loss sweep over the whole image.
+
+        The lattice around the prediction widens to lattice_max_rings and no further; a target that
+        turned back or stopped while hidden comes out where the pre-occlusion motion cannot put it (the
+        synthetic t2 walker turns back behind the occluder and the prediction walks on out of the image).
+        From `sweep_after` frames of re-detection on, every frame that is not `tracking` also correlates
+        one tile of a raster over the image: a lattice of lattice_rings rings (its centre included) of
+        windows of the predicted size, the tiles cycling frame to frame. With `sweep_filter` 'memory' the
+        tile is correlated with the long-term memory (LCT re-detection, Ma et al. CVPR 2015 Sec. 3.4,
+        which re-detects with a detector trained on confident frames only), the bars relative to the
+        memory's mean peak; with 'filter', with the tracking filter, the bars relative to its tracked mean.
+        The tile's best peak is a candidate when it lies more than half a window from the prediction (the
+        lattice searched there), is not failed and reaches redetect_peak_ratio x the mean ('filter': and
+        beats the lattice's pick `best`). Windows centred on it at the sizes of the re-detection's scale
+        search (redetect_scales: a size that drifted while the target was hidden) are correlated; the best
+        must pass the bars again and redetect_psr ('filter': and the memory must find the target there,
+        memory_ratio). Returns that detection, its window and its size. Filters with the PSR bar only
+        (KCF), as the look-alike guard: DCF-CA's failure test has state.
+        """
+        p, bank = self.params, self._bank
+        if not self._sweeping() or self._occluded < p.sweep_after:
+            return None
+        ih, iw = img.shape
+        span = (2 * p.lattice_rings + 1) * p.lattice_step
+        nx = max(1, math.ceil(iw / (span * window.w)))
+        ny = max(1, math.ceil(ih / (span * window.h)))
+        k = self._sweep % (nx * ny)
+        self._sweep += 1
+        cx, cy = (k % nx + 0.5) * iw / nx, (k // nx + 0.5) * ih / ny
+        tile = window.shifted(cx - window.cx, cy - window.cy)
+        memory = p.sweep_filter == "memory" and self._memory and self._mem_n > 0
+        if memory:
+            bar = p.redetect_peak_ratio * self._mem_sum / self._mem_n
+        else:
+            bar = p.redetect_peak_ratio * self._peak_sum / max(self._peak_n, 1)
+        with bank.memory_as_filter() if memory else contextlib.nullcontext():
+            dets, _ = bank.detect_lattice(img, tile, p.lattice_step, p.lattice_rings, centre=True)
+            if not dets:
+                return None
+            cand = max(dets, key=lambda d: d.peak)
+            near = abs(cand.cx - pred.cx) <= window.w / 2 and abs(cand.cy - pred.cy) <= window.h / 2
+            if near or self._failure(cand) or cand.peak < bar or (not memory and cand.peak <= best.peak):
+                return None
+            factors = self._scale_factors()
+            wins = scale_windows(cand.cx, cand.cy, pred.w, pred.h, bank.padding, factors)
+            dets = bank.detect(img, wins, factors)
+            mid = len(wins) // 2
+            i = max(range(len(dets)), key=lambda j: dets[j].peak * p.scale_penalty ** abs(j - mid))
+            det = dets[i]
+            if self._failure(det) or det.peak < bar or self._low_psr(det.psr):
+                return None
+        if not memory and not self._memory_knows(i):
+            return None
+        return det, wins[i], (pred.w * det.scale, pred.h * det.scale)
 
     def _set_coast_velocity(self) -> None:
         """(ours, `coast_velocity_window`) The centre velocity for re-detection: the trail's mean velocity."""

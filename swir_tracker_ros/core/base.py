@@ -8,11 +8,12 @@ gate, its peak -> Huber threshold map and its Kalman box model. `Tracker` select
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -365,14 +366,16 @@ class BaseFilter(ABC):
         rings: int,
         image_size: tuple[int, int] | None = None,
         half: tuple[int, int] | None = None,
+        centre: bool = False,
     ) -> tuple[int, int, list[tuple[int, int]], list[Box]]:
         """Re-detection lattice of (2 rings + 1)^2 windows around `window` (ours; variant measured).
 
         Centre steps are `step` x the window, snapped to whole template cells so that every window is a
         slice of one feature map (as in `grid_geometry`). Offsets whose window centre falls outside the
         image (`image_size` = (width, height)) are left out, and so is the centre (normal mode already
-        correlated it). With `half` = (ring r, parity 0 or 1), the windows of rings r and beyond are kept
-        only where (i + j) % 2 == parity: a checkerboard, the other half searched on the next frame (ours).
+        correlated it) unless `centre` (a tile of the long-loss sweep). With `half` = (ring r, parity 0
+        or 1), the windows of rings r and beyond are kept only where (i + j) % 2 == parity: a
+        checkerboard, the other half searched on the next frame (ours).
         Returns (step_x, step_y) in cells, the (i, j) offsets in steps and their windows.
         """
         c = self.cell
@@ -382,7 +385,7 @@ class BaseFilter(ABC):
         offsets, wins = [], []
         for j in range(-rings, rings + 1):
             for i in range(-rings, rings + 1):
-                if i == 0 and j == 0:
+                if i == 0 and j == 0 and not centre:
                     continue
                 if half is not None and max(abs(i), abs(j)) >= half[0] and (i + j) % 2 != half[1]:
                     continue
@@ -403,6 +406,7 @@ class BaseFilter(ABC):
         rings: int,
         scale: float = 1.0,
         half: tuple[int, int] | None = None,
+        centre: bool = False,
     ) -> tuple[list[Detection], list[Box]]:
         """Detections in the re-detection lattice around `window` (see `lattice_geometry`) and its windows.
 
@@ -414,7 +418,7 @@ class BaseFilter(ABC):
         """
         self._train_features = None
         ih, iw = img.shape[:2]
-        sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih), half)
+        sx, sy, offsets, wins = self.lattice_geometry(window, step, rings, (iw, ih), half, centre)
         if not wins:
             return [], []
         cols = [i for i, _ in offsets] + [0]
@@ -477,6 +481,15 @@ class BaseFilter(ABC):
         teach it the background. Here it verifies every `tracking` frame (core_contract.md item 3).
         """
         self.memory = copy.deepcopy(self.filter)
+
+    @contextlib.contextmanager
+    def memory_as_filter(self) -> Iterator[None]:
+        """Detections inside the block correlate the long-term memory instead of the filter."""
+        self.filter, self.memory = self.memory, self.filter
+        try:
+            yield
+        finally:
+            self.filter, self.memory = self.memory, self.filter
 
     def memory_score(self, index: int) -> float:
         """Peak of the memory filter's response on window `index` of the last `detect` call."""

@@ -153,6 +153,27 @@ class TrackerParams:
         100000,
     )
     lattice_max_rings: int = _f(3, "(ours) widest re-detection lattice (3: 7x7 windows)", 1, 10)
+    sweep_after: int = _f(
+        25,
+        "(ours, variant measured) frames of re-detection after which every frame that is not `tracking` "
+        "also searches one tile of a sweep over the whole image (a lattice_rings lattice, its centre "
+        "included, tiles cycling frame to frame), and a prediction that left the image is held at its "
+        "border instead of ending the track: a target that turned back or stopped while hidden is found "
+        "where the pre-occlusion motion cannot put it (synthetic t2, x_low_contrast_interlaced). The "
+        "box moves to a tile's peak only when it and a window centred on it pass the re-acquisition bars "
+        "(redetect_peak_ratio, redetect_psr; LCT's re-detection, Ma et al. CVPR 2015 Sec. 3.4); the "
+        "state turns `tracking` on the next frame's usual checks; pipeline kcf only; 0: off",
+        0,
+        100000,
+    )
+    sweep_filter: str = _f(
+        "memory",
+        "(ours, variant measured) what the long-loss sweep correlates: 'memory' the long-term memory, "
+        "trained on confident frames only (the bars relative to its mean peak); 'filter' the tracking "
+        "filter (the bars relative to its tracked mean, plus the memory's check at memory_ratio); both "
+        "measured alike (docs/tracking_core.md, twelfth pass)",
+        choices=("memory", "filter"),
+    )
     lattice_channels: int = _f(
         8,
         "(ours) the re-detection lattice is screened with the filter projected on this many principal "
