@@ -107,7 +107,7 @@ class Tracker:
         self._refused = 0  # tracked frames the update gate refused since it last passed one
         self._memory = False
         self._lattice = False
-        self._sweep = 0  # tiles of the long-loss sweep searched so far (`sweep_after`)
+        self._tiles: list[tuple[float, float]] = []  # centres of the sweep's tiles still to search
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
         """Start tracking `box` (input pixels) in `frame`; TrackerError with a reason if unusable."""
@@ -326,6 +326,7 @@ class Tracker:
             state = TrackState.LOST if self._occluded > p.max_occluded_frames else TrackState.OCCLUDED
         else:
             self._occluded = 0
+            self._tiles.clear()  # the next loss sweeps from its own prediction outwards
             self._remember_centre()
             state = TrackState.TRACKING
             self._peak_sum += det.peak
@@ -571,28 +572,31 @@ class Tracker:
         synthetic t2 walker turns back behind the occluder and the prediction walks on out of the image).
         From `sweep_after` frames of re-detection on, every frame that is not `tracking` also correlates
         one tile of a raster over the image: a lattice of lattice_rings rings (its centre included) of
-        windows of the predicted size, the tiles cycling frame to frame. With `sweep_filter` 'memory' the
-        tile is correlated with the long-term memory (LCT re-detection, Ma et al. CVPR 2015 Sec. 3.4,
-        which re-detects with a detector trained on confident frames only), the bars relative to the
-        memory's mean peak; with 'filter', with the tracking filter, the bars relative to its tracked mean.
-        The tile's best peak is a candidate when it lies more than half a window from the prediction (the
-        lattice searched there), is not failed and reaches redetect_peak_ratio x the mean ('filter': and
-        beats the lattice's pick `best`). Windows centred on it at the sizes of the re-detection's scale
-        search (redetect_scales: a size that drifted while the target was hidden) are correlated; the best
-        must pass the bars again and redetect_psr ('filter': and the memory must find the target there,
-        memory_ratio). Returns that detection, its window and its size. Filters with the PSR bar only
-        (KCF), as the look-alike guard: DCF-CA's failure test has state.
+        windows of the predicted size, one tile a frame, each pass over the image from the tile nearest
+        the prediction outwards (a target that stopped or turned back is usually near). With
+        `sweep_filter` 'memory' the tile is correlated with the long-term memory (LCT re-detection, Ma et
+        al. CVPR 2015 Sec. 3.4, which re-detects with a detector trained on confident frames only), the
+        bars relative to the memory's mean peak; with 'filter', with the tracking filter, the bars
+        relative to its tracked mean.
+        The tile's best peak is a candidate when it lies more than half the box from the prediction (the
+        lattice and the normal search looked there), is not failed and reaches redetect_peak_ratio x the
+        mean ('filter': and beats the lattice's pick `best`). Windows centred on it at the sizes of the
+        re-detection's scale search (redetect_scales: a size that drifted while the target was hidden)
+        are correlated; the best must pass the bars again and redetect_psr ('filter': and the memory must
+        find the target there, memory_ratio). Returns that detection, its window and its size. Filters
+        with the PSR bar only (KCF), as the look-alike guard: DCF-CA's failure test has state.
         """
         p, bank = self.params, self._bank
         if not self._sweeping() or self._occluded < p.sweep_after:
             return None
-        ih, iw = img.shape
-        span = (2 * p.lattice_rings + 1) * p.lattice_step
-        nx = max(1, math.ceil(iw / (span * window.w)))
-        ny = max(1, math.ceil(ih / (span * window.h)))
-        k = self._sweep % (nx * ny)
-        self._sweep += 1
-        cx, cy = (k % nx + 0.5) * iw / nx, (k // nx + 0.5) * ih / ny
+        if not self._tiles:  # a new pass over the image, the tiles nearest the prediction first
+            ih, iw = img.shape
+            span = (2 * p.lattice_rings + 1) * p.lattice_step
+            nx = max(1, math.ceil(iw / (span * window.w)))
+            ny = max(1, math.ceil(ih / (span * window.h)))
+            tiles = [((i + 0.5) * iw / nx, (j + 0.5) * ih / ny) for j in range(ny) for i in range(nx)]
+            self._tiles = sorted(tiles, key=lambda c: -math.hypot(c[0] - pred.cx, c[1] - pred.cy))
+        cx, cy = self._tiles.pop()
         tile = window.shifted(cx - window.cx, cy - window.cy)
         memory = p.sweep_filter == "memory" and self._memory and self._mem_n > 0
         if memory:
@@ -604,7 +608,7 @@ class Tracker:
             if not dets:
                 return None
             cand = max(dets, key=lambda d: d.peak)
-            near = abs(cand.cx - pred.cx) <= window.w / 2 and abs(cand.cy - pred.cy) <= window.h / 2
+            near = abs(cand.cx - pred.cx) <= pred.w / 2 and abs(cand.cy - pred.cy) <= pred.h / 2
             if near or self._failure(cand) or cand.peak < bar or (not memory and cand.peak <= best.peak):
                 return None
             factors = self._scale_factors()
