@@ -157,7 +157,8 @@ class TrackerParams:
         25,
         "(ours, variant measured) frames of re-detection after which every frame that is not `tracking` "
         "also searches one tile of a sweep over the whole image (a lattice_rings lattice, its centre "
-        "included, tiles cycling frame to frame), and a prediction that left the image is held at its "
+        "included; each pass from the tile nearest the prediction outwards), and a prediction that left "
+        "the image is held at its "
         "border instead of ending the track: a target that turned back or stopped while hidden is found "
         "where the pre-occlusion motion cannot put it (synthetic t2, x_low_contrast_interlaced). The "
         "box moves to a tile's peak only when it and a window centred on it pass the re-acquisition bars "
