@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from swir_tracker_ros.core.base import BaseFilter, Detection
-from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
+from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner, presmooth
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.params import PIPELINES, VARIANTS, TrackerParams
 from swir_tracker_ros.core.windows import scale_windows, search_window
@@ -96,6 +96,7 @@ class Tracker:
         self._noise: AdaptiveNoise | None = None
         self._box: Box | None = None  # current estimate, conditioned-image pixels
         self._init_size = (0.0, 0.0)
+        self._sigma = 0.0  # `presmooth` blur of the conditioned frames, pixels
         self._frame_shape: tuple[int, ...] = ()
         self._occluded = 0
         self._clock = 0.0  # frame periods since init
@@ -130,6 +131,8 @@ class Tracker:
         b = Box(box.x * ds, box.y * ds, box.w * ds, box.h * ds)
         self._frame_shape = frame.shape
         self._init_size = (b.w, b.h)
+        self._sigma = p.presmooth * math.sqrt(b.w * b.h) if p.variant == "measured" else 0.0
+        img = presmooth(img, self._sigma)
         self._bank = make_filter(p, b.w, b.h)  # the pipeline's base tracker, selected once
         self._bank.initialise(img, b)
         self._memory = p.memory_ratio > 0.0 and p.variant == "measured"  # the papers' variants: none
@@ -177,7 +180,7 @@ class Tracker:
                 raise TrackerError("frame size differs from the init frame")
             if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
                 raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
-            img = self._conditioner(frame, bit_depth)
+            img = presmooth(self._conditioner(frame, bit_depth), self._sigma)
             dx, dy = (float(v) for v in ego_shift)
             if not (math.isfinite(dx) and math.isfinite(dy)):
                 dx = dy = 0.0

@@ -34,6 +34,13 @@ class ConditioningConfig:
     downscale: float = 1.0  # frame resize factor applied before tracking (1.0: off)
 
 
+def presmooth(img: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian blur of a conditioned frame (sigma in pixels, replicated borders); sigma <= 0: the frame."""
+    if sigma <= 0.0:
+        return img
+    return cv2.GaussianBlur(img, (0, 0), sigma, borderType=cv2.BORDER_REPLICATE)
+
+
 def to_gray(frame: np.ndarray) -> np.ndarray:
     """2-D view of a frame: HxW as is, HxWx1 squeezed, HxWx3 BGR / HxWx4 BGRA converted to luma."""
     if not isinstance(frame, np.ndarray):

@@ -319,6 +319,16 @@ class TrackerParams:
     max_occluded_frames: int = _f(
         250, "(ours) frames in re-detection before the state becomes lost", 1, 100000
     )
+    presmooth: float = _f(
+        0.02,
+        "(ours, variant measured) Gaussian blur of the conditioned frame before any window is sampled, "
+        "sigma = this x sqrt(w h) of the start box (0.8-1.3 px for 25x72-40x100 px targets): windows "
+        "sampled at sub-pixel positions are smoothed unequally by the bilinear interpolation, so two "
+        "start boxes a pixel apart learned differently smoothed templates; a common blur dominates that "
+        "difference (docs/tracking_core.md, eleventh and twelfth passes); 0: off (the papers)",
+        0.0,
+        0.2,
+    )
     stretch: str = _f(
         "auto",
         "intensity stretch: auto (16-bit and float by percentiles), always, off",
