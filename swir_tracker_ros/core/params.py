@@ -320,12 +320,15 @@ class TrackerParams:
         250, "(ours) frames in re-detection before the state becomes lost", 1, 100000
     )
     presmooth: float = _f(
-        0.02,
+        0.0,
         "(ours, variant measured) Gaussian blur of the conditioned frame before any window is sampled, "
-        "sigma = this x sqrt(w h) of the start box (0.8-1.3 px for 25x72-40x100 px targets): windows "
+        "sigma = this x sqrt(w h) of the start box (0.02: 0.8-1.3 px for 25x72-40x100 px targets): windows "
         "sampled at sub-pixel positions are smoothed unequally by the bilinear interpolation, so two "
-        "start boxes a pixel apart learned differently smoothed templates; a common blur dominates that "
-        "difference (docs/tracking_core.md, eleventh and twelfth passes); 0: off (the papers)",
+        "start boxes a pixel apart learn differently smoothed templates. 0.02 halves the SRE spread of "
+        "starts 1 px apart and lifts VOT-TIR horse and PTB-TIR airplane past CSRT, but loses synthetic "
+        "t3's occlusion more often, and with the long-loss sweep its smoother memory took another skater "
+        "once OTB skating1's target was erased (docs/tracking_core.md, twelfth pass); 0: off (default, "
+        "the papers)",
         0.0,
         0.2,
     )
