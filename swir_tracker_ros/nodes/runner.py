@@ -112,14 +112,19 @@ def default_usage(name: str, factory: Callable) -> str:
 
 class _OneInterrupt:
     """Python's SIGINT handler while the node runs (rclpy's handler chains to it): the first SIGINT
-    raises KeyboardInterrupt to leave `spin`, later ones are ignored so that they cannot interrupt the
-    shutdown that the first one started. Inside `held_back()` a SIGINT is only noted, and raised when the
-    block ends."""
+    raises KeyboardInterrupt to stop the start-up, later ones are ignored so that they cannot interrupt
+    the shutdown that the first one started. Inside `held_back()` a SIGINT is only noted, and raised when
+    the block ends. Once `spinning`, a SIGINT raises nothing: rclpy's handler has shut the context down,
+    and `spin` leaves with ExternalShutdownException at a point of its choosing. A KeyboardInterrupt
+    raised anywhere in `spin` could land inside rclpy's `Task.__init__` before its `Future` fields are
+    set, and `Future.__del__` then printed "AttributeError: 'Task' object has no attribute '_exception'"
+    on the way out (seen once in test_hardening_shutdown)."""
 
     def __init__(self) -> None:
         self.seen = False
         self.held = 0
         self.pending = False
+        self.spinning = False
 
     def __call__(self, _signum: int, _frame: object) -> None:
         if self.held:
@@ -127,7 +132,8 @@ class _OneInterrupt:
             return
         if not self.seen:
             self.seen = True
-            raise KeyboardInterrupt
+            if not self.spinning:
+                raise KeyboardInterrupt
 
     @contextlib.contextmanager
     def held_back(self):
@@ -194,7 +200,8 @@ def run_node(
     if any(a in HELP_FLAGS for a in user_arguments(args)):
         print(usage() if usage is not None else default_usage(name, factory))
         return 0
-    signal.signal(signal.SIGINT, _OneInterrupt())
+    interrupt = _OneInterrupt()
+    signal.signal(signal.SIGINT, interrupt)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # rclpy's handler chains to a non-default one
     try:
         check_ros_args(args)
@@ -223,6 +230,7 @@ def run_node(
             raise
         _ignore_signals()
         return 0  # the signal's shutdown invalidated the context while the node was being built
+    interrupt.spinning = True
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
