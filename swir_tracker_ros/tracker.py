@@ -616,9 +616,7 @@ class Tracker:
                 return None
             factors = self._scale_factors()
             wins = scale_windows(cand.cx, cand.cy, pred.w, pred.h, bank.padding, factors)
-            dets = bank.detect(img, wins, factors)
-            mid = len(wins) // 2
-            i = max(range(len(dets)), key=lambda j: dets[j].peak * p.scale_penalty ** abs(j - mid))
+            dets, i, _ = bank.detect_scales(img, wins, factors, p.scale_penalty, climb=False)
             det = dets[i]
             if self._failure(det) or det.peak < bar or self._low_psr(det.psr):
                 return None
