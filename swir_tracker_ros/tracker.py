@@ -13,6 +13,7 @@ import numpy as np
 
 from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner, presmooth
+from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.params import PIPELINES, VARIANTS, TrackerParams
 from swir_tracker_ros.core.windows import scale_windows, search_window
@@ -102,6 +103,7 @@ class Tracker:
         self._clock = 0.0  # frame periods since init
         self._ego = (0.0, 0.0)  # summed ego shifts since init
         self._trail: deque[tuple[float, float, float]] = deque()  # (clock, x - ego x, y - ego y), tracked
+        self._sizes: deque[tuple[float, float]] = deque()  # (clock, sqrt(w h)) of the tracked frames
         self._departed = 0  # tracked frames since the box left the look-alike guard's motion reference
         self._peak_sum, self._peak_n = 0.0, 0  # peaks of the tracked (non-failed) frames
         self._mem_sum, self._mem_n = 0.0, 0  # memory peaks of the verified frames
@@ -140,6 +142,7 @@ class Tracker:
         if self._memory:
             self._bank.start_memory()
         self._box = b
+        self._remember_size()
         if p.variant != "cf":
             self._model = self._bank.box_model(b.w, b.h)
             self._size_rates = [i for i, n in enumerate(self._model.names) if n in SIZE_RATES]
@@ -180,7 +183,9 @@ class Tracker:
                 raise TrackerError("frame size differs from the init frame")
             if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
                 raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
-            img = presmooth(self._conditioner(frame, bit_depth), self._sigma)
+            img = self._conditioner(frame, bit_depth)
+            if self._sigma > 0.0:  # `presmooth`, computed where the windows read
+                img = SmoothedFrame(img, self._sigma)
             dx, dy = (float(v) for v in ego_shift)
             if not (math.isfinite(dx) and math.isfinite(dy)):
                 dx = dy = 0.0
@@ -289,6 +294,11 @@ class Tracker:
             weak = rejected = self._occluded > 0 and (self._weak(det.peak) or self._low_psr(det.psr))
             if not rejected:
                 rejected, learn = self._memory_verdict(best)
+            if rejected and p.variant == "measured" and p.rejected_size != "measured":
+                f = self._rejected_scale(pred, det.scale)
+                if f != det.scale:
+                    kf.x[self._size_rates] = 0.0
+                    z = model.measurement_from_box(Box.from_center(det.cx, det.cy, pred.w * f, pred.h * f))
         jump = self._sweep_tile(img, pred, wins[mid], det) if failed or rejected else None
         if jump is not None:  # (ours) the sweep found the target away from the prediction: start there
             det, mode, shown = jump[0], SearchMode.MULTI_WINDOW, (*shown, jump[1])
@@ -331,6 +341,7 @@ class Tracker:
             self._occluded = 0
             self._tiles.clear()  # the next loss sweeps from its own prediction outwards
             self._remember_centre()
+            self._remember_size()
             state = TrackState.TRACKING
             self._peak_sum += det.peak
             self._peak_n += 1
@@ -462,6 +473,26 @@ class Tracker:
         trail.append((self._clock, self._box.cx - self._ego[0], self._box.cy - self._ego[1]))
         while trail and trail[0][0] < self._clock - n:
             trail.popleft()
+
+    def _remember_size(self) -> None:
+        """Append the tracked size (sqrt(w h)) to the sizes of the last coast_velocity_window frames."""
+        sizes, n = self._sizes, self.params.coast_velocity_window
+        sizes.append((self._clock, math.sqrt(self._box.w * self._box.h)))
+        while sizes and sizes[0][0] < self._clock - n:
+            sizes.popleft()
+
+    def _rejected_scale(self, pred: Box, scale: float) -> float:
+        """(ours, `rejected_size`) The size factor that a rejected (non-failed, not `tracking`) frame
+        measures, from its winning `scale`: 1 ('held'), or ('recent') the scale kept within the sizes
+        (sqrt(w h)) of the tracked frames of the last coast_velocity_window frames and the prediction's.
+        A box that the checks do not take for the target may grow back to a size the target had, not
+        beyond it: the frame's peak may be an occluder crossing in front (synthetic t9)."""
+        if self.params.rejected_size == "held":
+            return 1.0
+        s = math.sqrt(pred.w * pred.h)
+        seen = [v for _, v in self._sizes] or [s]
+        lo, hi = min(min(seen), s), max(max(seen), s)
+        return min(max(s * scale, lo), hi) / s
 
     def _motion_reference(self) -> tuple[float, float, float, float] | None:
         """(ours, look-alike guard) Centre and velocity (image pixels, per frame) that the trail's motion

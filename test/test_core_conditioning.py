@@ -18,7 +18,7 @@ from swir_tracker_ros.core.conditioning import (
     single_field,
     to_gray,
 )
-from swir_tracker_ros.core.features import sample_patch
+from swir_tracker_ros.core.features import SmoothedFrame, sample_patch
 from swir_tracker_ros.core.params import TrackerParams
 from swir_tracker_ros.errors import ParameterError, TrackerError
 from swir_tracker_ros.types import Box
@@ -185,7 +185,27 @@ def test_a_presmoothed_frame_samples_alike_at_any_sub_pixel_offset(sequences_dir
         off = sample_patch(frame, box.shifted(0.5, 0.5), 112, 120)
         return _detail(off) / _detail(on)
 
-    sigma = 0.02 * math.sqrt(56.0 * 60.0)  # presmooth 0.02, the setting measured (default off)
+    sigma = 0.02 * math.sqrt(56.0 * 60.0)  # presmooth 0.02 (the default)
     raw, smooth = ratio(img), ratio(presmooth(img, sigma))
     assert raw < 0.4 and smooth > 0.75, (raw, smooth)
     assert presmooth(img, 0.0) is img
+
+
+def test_a_frame_smoothed_where_it_is_read_samples_as_the_whole_frame_smoothed() -> None:
+    """`SmoothedFrame` (the tracker's per-frame `presmooth`) blurs only the tiles the windows read: every
+    window, inside the frame or past its border, shrunk strongly (the anti-aliasing blur on top) or not,
+    samples bit for bit what it samples from the whole frame blurred, read after read in any order."""
+    rng = np.random.default_rng(5)
+    for _ in range(60):
+        h, w = (int(v) for v in rng.integers(40, 400, 2))
+        raw = rng.random((h, w)).astype(np.float32)
+        sigma = float(rng.uniform(0.3, 3.0))
+        full, lazy = presmooth(raw, sigma), SmoothedFrame(raw, sigma)
+        for _ in range(6):
+            bw, bh = rng.uniform(4.0, 300.0, 2)
+            box = Box(float(rng.uniform(-bw, w)), float(rng.uniform(-bh, h)), float(bw), float(bh))
+            ow, oh = (int(v) for v in rng.integers(4, 100, 2))
+            assert np.array_equal(sample_patch(lazy, box, ow, oh), sample_patch(full, box, ow, oh)), box
+    lazy = SmoothedFrame(np.zeros((504, 576), np.float32), 1.2)
+    sample_patch(lazy, Box(200.0, 150.0, 100.0, 250.0), 40, 100)  # a 40x100 target's window
+    assert 0.1 < lazy._done.mean() < 0.5  # the tiles about it, not the frame

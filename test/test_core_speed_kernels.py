@@ -18,6 +18,8 @@ import numpy as np
 import pytest
 
 from swir_tracker_ros.core import base, confidence, fhog, kcf
+from swir_tracker_ros.core.conditioning import presmooth
+from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box
 
@@ -68,7 +70,9 @@ def recorded(sequences_dir: Path) -> dict:
 
     def union(self, img, window, sx, sy, offsets, bounds, name, out=None):
         r = orig_union(self, img, window, sx, sy, offsets, bounds, name, out)
-        rec["union"].append((self, img.copy(), window, sx, sy, list(offsets), bounds, r.copy()))
+        # the pre-smoothed frame as a whole-frame blur: bit for bit what the tracker's windows read
+        frame = presmooth(img.raw, img.sigma) if isinstance(img, SmoothedFrame) else img.copy()
+        rec["union"].append((self, frame, window, sx, sy, list(offsets), bounds, r.copy()))
         return r
 
     mp.setattr(kcf.KCF, "respond", respond)

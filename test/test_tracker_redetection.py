@@ -223,9 +223,9 @@ def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
 
 
 def test_the_papers_variants_ignore_the_ninth_pass_rules() -> None:
-    """`redetect_psr`, `size_rate_peak_ratio`, the look-alike guard, the scale climb, the long-loss sweep and
-    the pre-smoothed frame are rules of variant `measured`: the papers' pipelines (here `robust_adaptive`,
-    paper 000) give the same boxes and states whatever their values."""
+    """`redetect_psr`, `size_rate_peak_ratio`, the look-alike guard, the scale climb, the long-loss sweep,
+    the pre-smoothed frame and the rejected frames' size are rules of variant `measured`: the papers'
+    pipelines (here `robust_adaptive`, paper 000) give the same boxes and states whatever their values."""
     src = open_source("synth:t1_full_static_size")
 
     def run(**kw: float) -> tuple[list, list]:
@@ -234,9 +234,9 @@ def test_the_papers_variants_ignore_the_ninth_pass_rules() -> None:
         return r.pred, r.states
 
     assert run(redetect_psr=0.0, size_rate_peak_ratio=0.0, lookalike_frames=0, scale_climb=False,
-               sweep_after=0, presmooth=0.0) == run(redetect_psr=50.0, size_rate_peak_ratio=2.0,
-                                                    lookalike_frames=30, scale_climb=True, sweep_after=1,
-                                                    presmooth=0.1)
+               sweep_after=0, presmooth=0.0, rejected_size="measured") == run(
+        redetect_psr=50.0, size_rate_peak_ratio=2.0, lookalike_frames=30, scale_climb=True, sweep_after=1,
+        presmooth=0.1, rejected_size="held")
 
 
 def sweep_stats(name: str, start: str, sweep_after: int) -> tuple[RunStats, list[TrackState]]:

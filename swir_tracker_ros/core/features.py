@@ -26,8 +26,79 @@ def _blur_margin(sigma: float) -> int:
     return (round(sigma * 8 + 1) | 1) // 2
 
 
+def blur_rect(
+    img: np.ndarray, sigma: float, r0: int, r1: int, c0: int, c1: int
+) -> tuple[np.ndarray, int, int]:
+    """Gaussian blur (sigma, replicated borders) of the frame region that holds rows [r0, r1) and columns
+    [c0, c1) (within the frame): (blurred slab, its first row, its first column).
+
+    Only that region plus the kernel half width k is blurred, bit for bit the values of blurring the whole
+    frame. Each slab edge is the frame's own edge or k pixels away from every pixel asked for; the columns
+    also start on a multiple of _BLUR_ALIGN and span a multiple of it (or end at the frame edge), so
+    OpenCV's vectorised row loops cover the same pixels in the same lanes as on the whole frame (an
+    unaligned column cut was ~3e-7 off; full-width rows need no alignment).
+    """
+    k = _blur_margin(sigma)
+    ih, iw = img.shape[:2]
+    r0, r1 = max(r0 - k, 0), min(r1 + k, ih)
+    c0 = max(c0 - k, 0) // _BLUR_ALIGN * _BLUR_ALIGN
+    c1 = min(c1 + k, iw)
+    if c1 < iw:
+        c1 = min(c0 + -(-(c1 - c0) // _BLUR_ALIGN) * _BLUR_ALIGN, iw)
+    return cv2.GaussianBlur(img[r0:r1, c0:c1], (0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE), r0, c0
+
+
+class SmoothedFrame:
+    """A frame blurred with `sigma` only where it is read (ours): `presmooth` of the whole frame, bit for bit,
+    at the cost of the windows' regions (`sample_patch` and `scale.scale_patches` call `ensure`).
+
+    The blurred values go into a frame-sized buffer, tile by tile (_BLUR_ALIGN x _BLUR_ALIGN pixels); a
+    read whose tiles are all done costs one look-up. `shape`, `dtype` and `ndim` are the frame's.
+    """
+
+    def __init__(self, raw: np.ndarray, sigma: float) -> None:
+        self.raw, self.sigma = raw, sigma
+        self.buf = np.empty_like(raw)
+        t = _BLUR_ALIGN
+        self._done = np.zeros((-(-raw.shape[0] // t), -(-raw.shape[1] // t)), dtype=bool)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.raw.shape
+
+    @property
+    def dtype(self) -> np.dtype:
+        return self.raw.dtype
+
+    @property
+    def ndim(self) -> int:
+        return self.raw.ndim
+
+    def ensure(self, r0: int, r1: int, c0: int, c1: int) -> np.ndarray:
+        """The buffer, with rows [r0, r1) x columns [c0, c1) (clamped into the frame) blurred."""
+        ih, iw = self.raw.shape[:2]
+        t = _BLUR_ALIGN
+        tr0, tr1 = max(r0, 0) // t, -(-min(max(r1, 1), ih) // t)
+        tc0, tc1 = max(c0, 0) // t, -(-min(max(c1, 1), iw) // t)
+        tr0, tc0 = min(tr0, tr1 - 1), min(tc0, tc1 - 1)
+        todo = ~self._done[tr0:tr1, tc0:tc1]
+        if todo.any():
+            # one tile more on each side: the next, slightly larger scale window or the training window
+            # a few pixels on is then read from tiles already done, not blurred again with this rectangle
+            nr, nc = self._done.shape
+            tr0, tr1, tc0, tc1 = max(tr0 - 1, 0), min(tr1 + 1, nr), max(tc0 - 1, 0), min(tc1 + 1, nc)
+            todo = ~self._done[tr0:tr1, tc0:tc1]
+            rows, cols = np.nonzero(todo.any(axis=1))[0], np.nonzero(todo.any(axis=0))[0]
+            a0, a1 = (tr0 + rows[0]) * t, min((tr0 + rows[-1] + 1) * t, ih)
+            b0, b1 = (tc0 + cols[0]) * t, min((tc0 + cols[-1] + 1) * t, iw)
+            slab, s0, d0 = blur_rect(self.raw, self.sigma, a0, a1, b0, b1)
+            self.buf[a0:a1, b0:b1] = slab[a0 - s0 : a1 - s0, b0 - d0 : b1 - d0]
+            self._done[tr0 + rows[0] : tr0 + rows[-1] + 1, tc0 + cols[0] : tc0 + cols[-1] + 1] = True
+        return self.buf
+
+
 def sample_patch(
-    img: np.ndarray, box: Box, out_w: int, out_h: int, out: np.ndarray | None = None
+    img: np.ndarray | SmoothedFrame, box: Box, out_w: int, out_h: int, out: np.ndarray | None = None
 ) -> np.ndarray:
     """Resample the image region `box` (may extend past the border) to out_h x out_w pixels.
 
@@ -41,26 +112,23 @@ def sample_patch(
     x0 = box.x + 0.5 * sx - 0.5
     y0 = box.y + 0.5 * sy - 0.5
     interp = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+    ih, iw = img.shape[:2]
+    # the pixels the warp reads (bilinear: one more on each side), clamped into the frame as the
+    # replicated border does
+    r0 = min(max(int(np.floor(y0)) - 1, 0), ih - 1)
+    r1 = min(max(int(np.ceil(y0 + out_h * sy)) + 1, 0), ih - 1) + 1
+    c0 = min(max(int(np.floor(x0)) - 1, 0), iw - 1)
+    c1 = min(max(int(np.ceil(x0 + out_w * sx)) + 1, 0), iw - 1) + 1
+    strong = sx > 2.0 or sy > 2.0  # strong shrink: pre-filter to limit aliasing
+    sigma = 0.5 * max(sx, sy)
+    if isinstance(img, SmoothedFrame):
+        k = _blur_margin(sigma) + _BLUR_ALIGN if strong else 0  # blur_rect's reach below
+        img = img.ensure(r0 - k, r1 + k, c0 - k, c1 + k)
     src = img
-    if sx > 2.0 or sy > 2.0:  # strong shrink: pre-filter to limit aliasing
-        sigma = 0.5 * max(sx, sy)
-        # Blur only the region the warp reads (clamped into the frame, as the replicated border does)
-        # plus the kernel half width k: bit for bit the values of blurring the whole frame. Each region
-        # edge is the frame's own edge or k pixels away from every pixel the warp samples; the columns
-        # also start on a multiple of _BLUR_ALIGN and span a multiple of it (or end at the frame edge),
-        # so OpenCV's vectorised row loops cover the same pixels in the same lanes as on the whole frame
-        # (an unaligned column cut was ~3e-7 off; full-width rows need no alignment).
-        k = _blur_margin(sigma)
-        ih, iw = img.shape[:2]
-        r0 = max(min(max(int(np.floor(y0)) - 1, 0), ih - 1) - k, 0)
-        r1 = min(min(max(int(np.ceil(y0 + out_h * sy)) + 1, 0), ih - 1) + k + 1, ih)
-        c0 = max(min(max(int(np.floor(x0)) - 1, 0), iw - 1) - k, 0) // _BLUR_ALIGN * _BLUR_ALIGN
-        c1 = min(min(max(int(np.ceil(x0 + out_w * sx)) + 1, 0), iw - 1) + k + 1, iw)
-        if c1 < iw:
-            c1 = min(c0 + -(-(c1 - c0) // _BLUR_ALIGN) * _BLUR_ALIGN, iw)
-        src = cv2.GaussianBlur(img[r0:r1, c0:c1], (0, 0), sigmaX=sigma, borderType=cv2.BORDER_REPLICATE)
-        y0 -= r0
-        x0 -= c0
+    if strong:
+        src, s0, d0 = blur_rect(img, sigma, r0, r1, c0, c1)
+        y0 -= s0
+        x0 -= d0
     M = np.array([[sx, 0.0, x0], [0.0, sy, y0]], dtype=np.float64)
     return cv2.warpAffine(
         src, M, (out_w, out_h), dst=out, flags=interp, borderMode=cv2.BORDER_REPLICATE

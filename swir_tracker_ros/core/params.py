@@ -286,6 +286,16 @@ class TrackerParams:
         0,
         100000,
     )
+    rejected_size: str = _f(
+        "recent",
+        "(ours, variant measured) size of a non-failed frame that is not accepted as `tracking`: "
+        "'measured' the winning scale, as a tracked frame; 'held' the prediction's size, as re-detection "
+        "does; 'recent' the winning scale kept within the sizes the box had in the tracked frames of the "
+        "last coast_velocity_window frames (and the prediction's): a turned or partly hidden target's box "
+        "can grow back to a size it had (OTB girl), an occluder crossing in front cannot grow it beyond "
+        "(synthetic t9: the box grew 1.16x on a pedestrian crossing in front and followed him)",
+        choices=("measured", "held", "recent"),
+    )
     memory_ratio: float = _f(
         0.5,
         "(ours, variant measured; LCT-style memory, Ma et al. CVPR 2015) a frame is `tracking` only when "
@@ -320,15 +330,14 @@ class TrackerParams:
         250, "(ours) frames in re-detection before the state becomes lost", 1, 100000
     )
     presmooth: float = _f(
-        0.0,
+        0.02,
         "(ours, variant measured) Gaussian blur of the conditioned frame before any window is sampled, "
         "sigma = this x sqrt(w h) of the start box (0.02: 0.8-1.3 px for 25x72-40x100 px targets): windows "
         "sampled at sub-pixel positions are smoothed unequally by the bilinear interpolation, so two "
-        "start boxes a pixel apart learn differently smoothed templates. 0.02 halves the SRE spread of "
-        "starts 1 px apart and lifts VOT-TIR horse and PTB-TIR airplane past CSRT, but loses synthetic "
-        "t3's occlusion more often, and with the long-loss sweep its smoother memory took another skater "
-        "once OTB skating1's target was erased (docs/tracking_core.md, twelfth pass); 0: off (default, "
-        "the papers)",
+        "start boxes a pixel apart learn differently smoothed templates. With rejected_size 'recent', "
+        "0.02 lifts VOT-TIR horse and PTB-TIR airplane past CSRT and the real OPE by 0.02, but OTB "
+        "skating1 falls to another skater from 2 of its 12 SRE starts (docs/tracking_core.md, thirteenth "
+        "pass); 0: off (the papers)",
         0.0,
         0.2,
     )

@@ -37,6 +37,7 @@ import cv2
 import numpy as np
 import scipy.fft as sfft
 
+from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.fhog import fhog
 from swir_tracker_ros.core.windows import FFT_SIZES
 from swir_tracker_ros.errors import ParameterError, TrackerError
@@ -113,7 +114,14 @@ def _label_spectrum(n: int, sigma: float) -> np.ndarray:
 
 
 def scale_patches(
-    img: np.ndarray, cx: float, cy: float, w: float, h: float, factors: np.ndarray, out_w: int, out_h: int
+    img: np.ndarray | SmoothedFrame,
+    cx: float,
+    cy: float,
+    w: float,
+    h: float,
+    factors: np.ndarray,
+    out_w: int,
+    out_h: int,
 ) -> np.ndarray:
     """(S, out_h, out_w) float32: for each factor s the region of s w x s h pixels centred on (cx, cy),
     resampled to out_w x out_h (replicated borders).
@@ -130,6 +138,8 @@ def scale_patches(
     half_w, half_h = 0.5 * w * float(factors.max()), 0.5 * h * float(factors.max())
     rx0, ry0 = math.floor(cx - half_w) - pad, math.floor(cy - half_h) - pad
     rx1, ry1 = math.ceil(cx + half_w) + pad + 1, math.ceil(cy + half_h) + pad + 1
+    if isinstance(img, SmoothedFrame):
+        img = img.ensure(ry0, ry1, rx0, rx1)
     if rx0 >= 0 and ry0 >= 0 and rx1 <= iw and ry1 <= ih:
         region = img[ry0:ry1, rx0:rx1]
     else:  # replicate the border: clipped index vectors (small region, one fancy-index copy)
