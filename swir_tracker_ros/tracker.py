@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from swir_tracker_ros.core.base import BaseFilter, Detection
-from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner, presmooth
+from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
 from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.params import PIPELINES, VARIANTS, TrackerParams
@@ -134,7 +134,7 @@ class Tracker:
         self._frame_shape = frame.shape
         self._init_size = (b.w, b.h)
         self._sigma = p.presmooth * math.sqrt(b.w * b.h) if p.variant == "measured" else 0.0
-        img = presmooth(img, self._sigma)
+        img = self._smoothed(img)
         self._bank = make_filter(p, b.w, b.h)  # the pipeline's base tracker, selected once
         self._bank.initialise(img, b)
         self._memory = p.memory_ratio > 0.0 and p.variant == "measured"  # the papers' variants: none
@@ -183,9 +183,7 @@ class Tracker:
                 raise TrackerError("frame size differs from the init frame")
             if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
                 raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
-            img = self._conditioner(frame, bit_depth)
-            if self._sigma > 0.0:  # `presmooth`, computed where the windows read
-                img = SmoothedFrame(img, self._sigma)
+            img = self._smoothed(self._conditioner(frame, bit_depth))
             dx, dy = (float(v) for v in ego_shift)
             if not (math.isfinite(dx) and math.isfinite(dy)):
                 dx = dy = 0.0
@@ -201,6 +199,10 @@ class Tracker:
         except _RECOVERABLE:
             self._state = TrackState.LOST
             return self._result(self._box, TrackState.LOST)
+
+    def _smoothed(self, img: np.ndarray) -> np.ndarray | SmoothedFrame:
+        """The conditioned frame as the windows sample it: blurred by `presmooth` (where they read it)."""
+        return SmoothedFrame(img, self._sigma) if self._sigma > 0.0 else img
 
     # ------------------------------------------------------------------ per-frame steps
     def _step_cf(self, img: np.ndarray) -> TrackResult:
@@ -280,25 +282,20 @@ class Tracker:
             shown = tuple(grid)
         if not failed and self._weak(det.peak, p.size_rate_peak_ratio):
             kf.x[self._size_rates] = 0.0  # (ours) a weak frame's size is measured, not extrapolated
-        size = (
-            (pred.w * det.scale, pred.h * det.scale)
-            if not failed or p.grid_scale_search
-            else (pred.w, pred.h)
-        )
-        meas = Box.from_center(det.cx, det.cy, *size)
-        k = self._threshold(det.peak)
-        z = model.measurement_from_box(meas)
         rejected, learn, weak = False, False, False
+        scale = det.scale
         if not failed:
             # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
             weak = rejected = self._occluded > 0 and (self._weak(det.peak) or self._low_psr(det.psr))
             if not rejected:
                 rejected, learn = self._memory_verdict(best)
             if rejected and p.variant == "measured" and p.rejected_size != "measured":
-                f = self._rejected_scale(pred, det.scale)
-                if f != det.scale:
+                scale = self._rejected_scale(pred, det.scale)
+                if scale != det.scale:
                     kf.x[self._size_rates] = 0.0
-                    z = model.measurement_from_box(Box.from_center(det.cx, det.cy, pred.w * f, pred.h * f))
+        size = (pred.w * scale, pred.h * scale) if not failed or p.grid_scale_search else (pred.w, pred.h)
+        k = self._threshold(det.peak)
+        z = model.measurement_from_box(Box.from_center(det.cx, det.cy, *size))
         jump = self._sweep_tile(img, pred, wins[mid], det) if failed or rejected else None
         if jump is not None:  # (ours) the sweep found the target away from the prediction: start there
             det, mode, shown = jump[0], SearchMode.MULTI_WINDOW, (*shown, jump[1])
@@ -469,17 +466,18 @@ class Tracker:
         n = self.params.coast_velocity_window
         if n <= 0 or self.params.variant != "measured":  # only `_set_coast_velocity` reads the trail
             return
-        trail = self._trail
-        trail.append((self._clock, self._box.cx - self._ego[0], self._box.cy - self._ego[1]))
-        while trail and trail[0][0] < self._clock - n:
-            trail.popleft()
+        b, (ex, ey) = self._box, self._ego
+        self._keep_recent(self._trail, (self._clock, b.cx - ex, b.cy - ey))
 
     def _remember_size(self) -> None:
         """Append the tracked size (sqrt(w h)) to the sizes of the last coast_velocity_window frames."""
-        sizes, n = self._sizes, self.params.coast_velocity_window
-        sizes.append((self._clock, math.sqrt(self._box.w * self._box.h)))
-        while sizes and sizes[0][0] < self._clock - n:
-            sizes.popleft()
+        self._keep_recent(self._sizes, (self._clock, math.sqrt(self._box.w * self._box.h)))
+
+    def _keep_recent(self, entries: deque, entry: tuple[float, ...]) -> None:
+        """Append `entry` (its clock first) and drop the entries older than coast_velocity_window frames."""
+        entries.append(entry)
+        while entries and entries[0][0] < self._clock - self.params.coast_velocity_window:
+            entries.popleft()
 
     def _rejected_scale(self, pred: Box, scale: float) -> float:
         """(ours, `rejected_size`) The size factor that a rejected (non-failed, not `tracking`) frame

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from functools import lru_cache
 
@@ -115,10 +116,10 @@ def sample_patch(
     ih, iw = img.shape[:2]
     # the pixels the warp reads (bilinear: one more on each side), clamped into the frame as the
     # replicated border does
-    r0 = min(max(int(np.floor(y0)) - 1, 0), ih - 1)
-    r1 = min(max(int(np.ceil(y0 + out_h * sy)) + 1, 0), ih - 1) + 1
-    c0 = min(max(int(np.floor(x0)) - 1, 0), iw - 1)
-    c1 = min(max(int(np.ceil(x0 + out_w * sx)) + 1, 0), iw - 1) + 1
+    r0 = min(max(math.floor(y0) - 1, 0), ih - 1)
+    r1 = min(max(math.ceil(y0 + out_h * sy) + 1, 0), ih - 1) + 1
+    c0 = min(max(math.floor(x0) - 1, 0), iw - 1)
+    c1 = min(max(math.ceil(x0 + out_w * sx) + 1, 0), iw - 1) + 1
     strong = sx > 2.0 or sy > 2.0  # strong shrink: pre-filter to limit aliasing
     sigma = 0.5 * max(sx, sy)
     if isinstance(img, SmoothedFrame):
