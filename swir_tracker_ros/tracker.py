@@ -758,6 +758,10 @@ class Tracker:
 
         w0, h0 = self._init_size
         scale = math.sqrt(box.w * box.h / (w0 * h0)) if w0 > 0 and h0 > 0 and box.is_valid() else 1.0
+        velocity = (0.0, 0.0)
+        if self._kf is not None and self._centre_rates:
+            vx, vy = (float(self._kf.x[i]) * inv for i in self._centre_rates[:2])
+            velocity = (vx, vy) if math.isfinite(vx) and math.isfinite(vy) else velocity
         return TrackResult(
             box=up(box),
             state=state,
@@ -770,4 +774,5 @@ class Tracker:
             scale=scale,
             model_updated=updated,
             search_windows=tuple(up(b) for b in windows),
+            velocity=velocity,
         )

@@ -98,3 +98,6 @@ class TrackResult:
     scale: float = 1.0  # size relative to the initial box
     model_updated: bool = False
     search_windows: tuple[Box, ...] = field(default_factory=tuple)
+    # estimated image velocity of the box centre (input pixels per frame period; the Kalman state, ego
+    # shifts excluded): the target's own motion when ego shifts are given, else its motion in the image
+    velocity: tuple[float, float] = (0.0, 0.0)
