@@ -100,21 +100,22 @@ def summarise(times: list[float], cpu: float) -> dict:
 def warm_up() -> None:
     """Load (on a fresh install: compile) every compiled loop before timing, as the tracker node does at
     start-up; otherwise the first re-detection lattice pays numba's compile inside the timed frames."""
-    from swir_tracker_ros.core import fhog
+    from swir_tracker_ros.tracker import Tracker
 
-    fhog.warm_up()
+    Tracker.warm_up()
 
 
 def tracker_params(occlusion: bool, estimator: str | None = None):
     """Default TrackerParams; `estimator` overrides the default filter's scale_estimator (e.g. "dsst")."""
     from swir_tracker_ros.tracker import TrackerParams
 
-    params = TrackerParams(max_occluded_frames=100000) if occlusion else TrackerParams()
+    params = TrackerParams()
     if estimator is not None:
-        params.filter_params().scale_estimator = estimator
+        params.base.scale_estimator = estimator
     if occlusion:
         # a PSR threshold no response reaches forces re-detection (the default's lattice) every frame
-        params.kcf.psr_threshold = 100.0
+        params.occlusion.max_frames = 100000
+        params.base.psr_threshold = 100.0
     return params
 
 

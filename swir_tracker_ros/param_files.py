@@ -11,6 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from swir_tracker_ros.configs import ConfigurationChoice
 from swir_tracker_ros.demo import config as demo_config
 from swir_tracker_ros.nodes import acquisition_node, positioner_node, tracker_node
 from swir_tracker_ros.nodes.param_docs import ParamsFile, params_yaml, replace_table
@@ -31,6 +32,7 @@ def params_files() -> list[ParamsFile]:
 def documented_tables() -> list[tuple[str, type, str]]:
     """(docs file relative to the repository, params class, prefix) of every generated docs table."""
     return [("docs/tracker_node.md", TrackerNodeParams, ""),
+            ("docs/tracker_node.md", ConfigurationChoice, "tracker."),
             ("docs/tracker_node.md", TrackerParams, "tracker."),
             ("docs/positioner.md", PositionerParams, "")]
 

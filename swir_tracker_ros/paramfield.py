@@ -33,14 +33,20 @@ def param(default: Any, doc: str, lo: float | None = None, hi: float | None = No
 _SCALAR_TYPES: dict[Any, tuple[type, ...]] = {str: (str,), int: (int,), float: (int, float), bool: (bool,)}
 
 
+def _allows_none(kind: Any) -> bool:
+    """Whether an annotation admits None (`X | None`): a policy a configuration may leave out."""
+    return type(None) in typing.get_args(kind)
+
+
 def validate_params(params: Any, prefix: str = "") -> None:
     """The one ROS-free check of a parameter dataclass (docs/interfaces.md "Parameters").
 
     Every field must have its annotated type (an int is accepted for a float), be finite, lie within its
     metadata `min` / `max` and be one of its `choices`; a field holding a parameter dataclass is checked
-    recursively with the prefix `<name>.`, as its ROS parameters are named. Each level's own cross-field
-    rule, a method `check()` if it has one, runs after its fields. Raises `ParameterError` naming the
-    parameter (`kcf.padding`) and the value.
+    recursively with the prefix `<name>.`, as its ROS parameters are named (its runtime class: a field may
+    take one of several Params classes, or None where the annotation admits it). Each level's own
+    cross-field rule, a method `check()` if it has one, runs after its fields. Raises `ParameterError`
+    naming the parameter (`base.padding`) and the value.
     """
     from swir_tracker_ros.errors import ParameterError
 
@@ -48,9 +54,16 @@ def validate_params(params: Any, prefix: str = "") -> None:
     for f in dataclasses.fields(params):
         value, meta, name = getattr(params, f.name), f.metadata, prefix + f.name
         kind = hints[f.name]
-        if dataclasses.is_dataclass(kind):
-            if not isinstance(value, kind):
-                raise ParameterError(f"parameter {name} must be a {kind.__name__}, got {value!r}")
+        options = typing.get_args(kind)
+        nested = dataclasses.is_dataclass(kind) or any(dataclasses.is_dataclass(a) for a in options)
+        if nested:
+            if value is None and _allows_none(kind):
+                continue
+            allowed = (kind,) if dataclasses.is_dataclass(kind) else tuple(
+                a for a in options if dataclasses.is_dataclass(a))
+            if not isinstance(value, allowed):
+                names = " or ".join(a.__name__ for a in allowed)
+                raise ParameterError(f"parameter {name} must be a {names}, got {value!r}")
             validate_params(value, name + ".")
             continue
         wrong_bool = isinstance(value, bool) and kind is not bool
@@ -72,16 +85,44 @@ def validate_params(params: Any, prefix: str = "") -> None:
         check()
 
 
-def flat_fields(cls: type, prefix: str = "") -> list[tuple[str, dataclasses.Field, Any]]:
-    """(dotted name, field, default) of every leaf parameter of `cls`, recursing into nested dataclasses."""
+def as_instance(params: Any) -> Any:
+    """A parameter dataclass instance: `params` itself, or its class's default instance."""
+    return params() if isinstance(params, type) else params
+
+
+def flat_fields(params: Any, prefix: str = "") -> list[tuple[str, dataclasses.Field, Any]]:
+    """(dotted name, field, value) of every leaf parameter of a parameter dataclass instance (a class: its
+    default instance), recursing into the nested Params it holds; a policy left out (None) has none."""
+    obj = as_instance(params)
     out: list[tuple[str, dataclasses.Field, Any]] = []
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        kind = hints[f.name]
-        if dataclasses.is_dataclass(kind):
-            out += flat_fields(kind, prefix + f.name + ".")
-        else:
-            factory = f.default_factory
-            default = f.default if f.default is not dataclasses.MISSING else factory()  # type: ignore[misc]
-            out.append((prefix + f.name, f, default))
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if dataclasses.is_dataclass(value):
+            out += flat_fields(value, prefix + f.name + ".")
+        elif value is not None:
+            out.append((prefix + f.name, f, value))
     return out
+
+
+def leaf_type(params: Any, dotted: str) -> Any:
+    """Annotated type of the leaf field `a.b.c` of a parameter dataclass instance (through the nested
+    Params it holds)."""
+    head, _, rest = dotted.partition(".")
+    if rest:
+        return leaf_type(getattr(params, head), rest)
+    return typing.get_type_hints(type(params))[head]
+
+
+def rebuild(params: Any, values: dict[str, Any]) -> Any:
+    """A copy of the parameter dataclass instance `params` with the dotted leaf `values` replaced (the
+    nested Params keep their classes)."""
+    kwargs: dict[str, Any] = {}
+    for f in dataclasses.fields(params):
+        current = getattr(params, f.name)
+        if dataclasses.is_dataclass(current):
+            head = f.name + "."
+            sub = {k[len(head):]: v for k, v in values.items() if k.startswith(head)}
+            kwargs[f.name] = rebuild(current, sub)
+        elif f.name in values:
+            kwargs[f.name] = values[f.name]
+    return dataclasses.replace(params, **kwargs)

@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 from scipy.sparse.linalg import LinearOperator, cg
 
+from swir_tracker_ros.configs import configuration
 from swir_tracker_ros.core.bacf import BACF, BACFParams
 from swir_tracker_ros.core.confidence import analyse
 from swir_tracker_ros.core.features import extract_features, feature_shape, sample_patch
+from swir_tracker_ros.core.fft import irfft2, rfft2
 from swir_tracker_ros.core.filters import FILTERS, BACFFilter, make_filter
-from swir_tracker_ros.core.kcf import irfft2, rfft2
-from swir_tracker_ros.core.params import PIPELINES, TrackerParams
+from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.tracker import Tracker
@@ -109,38 +110,38 @@ def test_bacf_recovers_shifts_of_a_real_patch_beyond_the_kcf_window() -> None:
 
 
 def test_params_validate_and_nest_in_tracker_params() -> None:
-    assert "bacf" in PIPELINES and FILTERS["bacf"] is BACFFilter
-    TrackerParams(pipeline="bacf").validate()
+    assert FILTERS[BACFParams] is BACFFilter
+    configuration("measured", "bacf").validate()
     for name, value in [("padding", 0.1), ("admm_iterations", 0), ("lambda_", float("nan"))]:
-        p = TrackerParams(pipeline="bacf")
-        setattr(p.bacf, name, value)
-        with pytest.raises(ParameterError, match=f"bacf.{name}"):
+        p = configuration("measured", "bacf")
+        setattr(p.base, name, value)
+        with pytest.raises(ParameterError, match=f"base.{name}"):
             p.validate()
     assert BACFParams().output_sigma_factor == pytest.approx(1 / 16)
-    assert BACFParams().psr_threshold == TrackerParams().kcf.psr_threshold  # inherited, written once
+    assert BACFParams().psr_threshold == KCFParams().psr_threshold  # inherited, written once
 
 
 def test_pipeline_bacf_is_selected_calibrated_and_tracks() -> None:
     img, box = first_frame()
-    # scale_penalty 1, coast_velocity_window 0: BACF was measured with the largest-peak scale pick and the
-    # Kalman velocity while re-detecting (before those defaults; with them the PSR at frame 30 is 6.7 and
+    # scale penalty 1, no trail: BACF was measured with the largest-peak scale pick and the Kalman
+    # velocity while re-detecting (before those defaults; with them the PSR at frame 30 is 6.7 and
     # 6.1 instead of 7.1, under the failure threshold 7)
-    p = TrackerParams(pipeline="bacf", scale_penalty=1.0, coast_velocity_window=0)
-    bank = make_filter(p, box.w, box.h)
+    p = configuration("measured", "bacf")
+    p.scale.penalty, p.coast.trail_velocity, p.trail_frames = 1.0, False, 0
+    bank = make_filter(p.base, box.w, box.h)
     assert isinstance(bank, BACFFilter)
     cells = (bank.tw // bank.cell) * (bank.th // bank.cell)
-    assert cells <= p.bacf.max_window_cells
-    big = make_filter(p, 4 * box.w, 4 * box.h)  # a large target: the template is capped
-    assert (big.tw // big.cell) * (big.th // big.cell) <= p.bacf.max_window_cells
+    assert cells <= p.base.max_window_cells
+    big = make_filter(p.base, 4 * box.w, 4 * box.h)  # a large target: the template is capped
+    assert (big.tw // big.cell) * (big.th // big.cell) <= p.base.max_window_cells
     bank.initialise(img, box)
     win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
     det = bank.detect(img, [win])[0]
-    assert det.peak == pytest.approx(p.bacf.reference_peak, rel=1e-3)  # first-frame self response
+    assert det.peak == pytest.approx(p.base.reference_peak, rel=1e-3)  # first-frame self response
     frames = [(cv2.imread(str(SEQ / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE)) for i in range(1, 31)]
     gt = np.loadtxt(SEQ / "gt.txt", delimiter=",")
     trk = Tracker(p)
     trk.init(frames[0], box)
-    assert type(trk._bank) is BACFFilter
     for frame in frames[1:]:
         res = trk.update(frame)
     gx, gy, gw, gh = gt[len(frames) - 1]
@@ -153,9 +154,7 @@ def test_filter_maps_peaks_to_image_pixels_for_both_window_shapes(shape: str) ->
     """The tracker hands in proportional windows; a square filter window must still map its peak (and
     the re-detection lattice's) back to the right image pixels."""
     img, box = first_frame()
-    p = TrackerParams(pipeline="bacf")
-    p.bacf.window_shape = shape
-    bank = make_filter(p, box.w, box.h)
+    bank = make_filter(BACFParams(window_shape=shape), box.w, box.h)
     assert (bank.tw == bank.th) == (shape == "square")
     bank.initialise(img, box)
     win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
@@ -166,7 +165,7 @@ def test_filter_maps_peaks_to_image_pixels_for_both_window_shapes(shape: str) ->
     side = np.sqrt(win.w * win.h)
     assert det.window.w == pytest.approx(side if shape == "square" else win.w)
     off = win.shifted(-0.6 * win.w, 0.3 * win.h)  # the lattice around a prediction off the target
-    dets, _ = bank.detect_lattice(moved, off, 0.35, 2)
+    dets, _ = bank.detect_lattice(moved, off, 0.35, 2, channels=8)
     best = max(dets, key=lambda d: d.peak)
     assert abs(best.cx - box.cx - dx) < 2.0 and abs(best.cy - box.cy - dy) < 2.0
 
@@ -180,9 +179,7 @@ def test_relative_psr_failure_test() -> None:
     tracked = Detection(25.0, 25.0, 0.8, 14.0, 60.0, 1.0, win)
     wall = Detection(25.0, 25.0, 0.35, 8.0, 25.0, 1.0, win)
     for ratio, expected in [(0.6, True), (0.0, False)]:
-        p = TrackerParams(pipeline="bacf")
-        p.bacf.psr_ratio = ratio
-        bank = make_filter(p, 10.0, 10.0)
+        bank = make_filter(BACFParams(psr_ratio=ratio), 10.0, 10.0)
         assert not bank.failed(wall)  # no updated frame yet: the absolute threshold (7) alone
         for _ in range(3):
             assert not bank.failed(tracked) and bank.confident(tracked)
@@ -194,7 +191,7 @@ def test_psr_is_taken_around_the_peak_over_psr_window_target_sizes() -> None:
     kcf window would see it; one next to the peak still lowers it."""
     from swir_tracker_ros.core.confidence import psr
 
-    p = TrackerParams(pipeline="bacf")
+    p = BACFParams()
     bank = make_filter(p, 40.0, 40.0)
     rows, cols = bank.shape[1:]
     rng = np.random.default_rng(3)
@@ -204,7 +201,7 @@ def test_psr_is_taken_around_the_peak_over_psr_window_target_sizes() -> None:
     r, c, e = rows // 2, cols // 2, 2 * bank.exclusion
     far[r - 1 : r + 2, c - 1 : c + 2] = 0.9  # a look-alike half a window away: outside 2.5 target sizes
     near[e - 1 : e + 2, 0:2] = 0.9  # one just outside the exclusion zone
-    k = p.bacf.psr_window / (1.0 + p.bacf.padding)
+    k = p.psr_window / (1.0 + p.padding)
     assert bank._local_psr(far, k) > 2.0 * psr(far, 0, 0, bank.exclusion)
     assert bank._local_psr(near, k) < 0.5 * bank._local_psr(far, k)
     det = bank._detections(far[None], [Box(0.0, 0.0, 200.0, 200.0)], [1.0])[0]

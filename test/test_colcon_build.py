@@ -55,7 +55,7 @@ def test_installed_tracker_prints_help_from_the_install(prefix: Path) -> None:
     out = subprocess.run([str(prefix / "lib" / PKG / "tracker"), "--help"], env=env, capture_output=True,
                          text=True, timeout=60)
     assert out.returncode == 0, out.stderr
-    assert "tracker.pipeline" in out.stdout and "image_topic" in out.stdout
+    assert "tracker.configuration" in out.stdout and "image_topic" in out.stdout
     code = "import swir_tracker_ros; print(swir_tracker_ros.__file__)"
     where = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60,
                            cwd=prefix)  # not the source tree, which `python -c` would put first on sys.path

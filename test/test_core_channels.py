@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core import fhog as fhog_module
+from swir_tracker_ros.core import kernels
 from swir_tracker_ros.core.channels import cell_means, intensity_channels, intensity_histogram
 from swir_tracker_ros.core.features import extract_features, feature_shape, unwindowed_features
 from swir_tracker_ros.core.fhog import N_CHANNELS, fhog
@@ -32,14 +32,14 @@ def test_compiled_cell_means_equal_numpy_mean_bit_for_bit(
     patches = np.stack([img[y : y + 250, 40:141] for y in (0, 17, 33)]).astype(np.float32) / 255.0
     for planes in (patches[:, None], intensity_histogram(patches, 8)):
         fast = cell_means(planes, cell)
-        monkeypatch.setattr(fhog_module, "USE_JIT", False)
+        monkeypatch.setattr(kernels, "USE_JIT", False)
         slow = cell_means(planes, cell)
-        monkeypatch.setattr(fhog_module, "USE_JIT", True)
+        monkeypatch.setattr(kernels, "USE_JIT", True)
         assert fast.shape == slow.shape == (3, planes.shape[1], 250 // cell, 101 // cell)
         np.testing.assert_array_equal(fast, slow)
         assert fast.tobytes() == slow.tobytes()  # bit for bit (signed zeros too)
     if cell < 8:  # the compiled loop did run (cell 8: numpy's unrolled pairwise sum, numpy path kept)
-        assert fhog_module.corr_jit().cell_means_kernel.signatures
+        assert kernels.corr_jit().cell_means_kernel.signatures
 
 
 def test_intensity_histogram_is_a_soft_partition_of_unity() -> None:

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import cv2
@@ -19,8 +18,9 @@ from swir_tracker_ros.core.conditioning import (
     to_gray,
 )
 from swir_tracker_ros.core.features import SmoothedFrame, sample_patch
-from swir_tracker_ros.core.params import TrackerParams
 from swir_tracker_ros.errors import ParameterError, TrackerError
+from swir_tracker_ros.paramfield import flat_fields
+from swir_tracker_ros.tracker import TrackerParams
 from swir_tracker_ros.types import Box
 
 
@@ -68,37 +68,36 @@ def test_dead_pixels_fields_and_downscale() -> None:
 
 
 def test_tracker_params_are_documented_and_validated() -> None:
+    from swir_tracker_ros.configs import configuration
     from swir_tracker_ros.core.bacf import BACFParams
     from swir_tracker_ros.core.dcf_ca import DCFCAParams
     from swir_tracker_ros.core.kcf import KCFParams
-    from swir_tracker_ros.core.scale import DSSTParams
+    from swir_tracker_ros.policies.scale_search import ScaleSearch, ScaleSearchParams
 
     p = TrackerParams()
     p.validate()
-    nested = ("KCFParams", "DCFCAParams", "BACFParams", "DSSTParams")
-    for cls in (TrackerParams, KCFParams, DCFCAParams, BACFParams, DSSTParams):
-        for f in dataclasses.fields(cls):
-            assert f.type in ("str", "int", "float", "bool", *nested), f.name
-            assert f.metadata.get("doc"), f.name
-            if f.type == "str":
-                assert f.default in f.metadata["choices"]
-    assert p.scale_factors() == pytest.approx((0.90, 0.95, 1.0, 1.05, 1.10))
-    k, d = p.kcf, p.dcf_ca
+    for base in (KCFParams(), DCFCAParams(), BACFParams()):
+        for name, f, value in flat_fields(TrackerParams(base=base)):
+            assert f.metadata.get("doc"), name
+            if isinstance(value, str):
+                assert value in f.metadata["choices"], name
+    assert ScaleSearch(p.scale).normal == pytest.approx((0.90, 0.95, 1.0, 1.05, 1.10))
+    k, d = configuration("robust_adaptive").base, DCFCAParams()
     assert (k.padding, k.lambda_, k.kernel_sigma, k.interp_factor) == (1.5, 1e-4, 0.5, 0.02)
     assert (d.lambda1, d.lambda2, d.padding, d.interp_factor) == (1e-4, 25.0, 2.0, 0.015)
     assert (k.psr_threshold, k.update_peak_threshold, d.apce_occlusion_ratio) == (7.0, 0.5, 0.6)
     for bad in (
-        dict(variant="magic"),
-        dict(kcf=KCFParams(psr_threshold=-1.0)),
-        dict(n_scales=4),
-        dict(kcf=KCFParams(padding="2")),
-        dict(dcf_ca=DCFCAParams(lambda2=math.nan)),
-        dict(grid_scale_search=1),
+        dict(base=KCFParams(psr_threshold=-1.0)),
+        dict(scale=ScaleSearchParams(n=4)),
+        dict(base=KCFParams(padding="2")),
+        dict(base=DCFCAParams(lambda2=math.nan)),
+        dict(conditioning=ConditioningConfig(low_percentile=40.0, high_percentile=39.0)),
+        dict(trail_frames=1.5),
     ):
         with pytest.raises(ParameterError):
             TrackerParams(**bad).validate()
-    with pytest.raises(ParameterError, match=r"kcf\.psr_threshold"):
-        TrackerParams(kcf=KCFParams(psr_threshold=-1.0)).validate()
+    with pytest.raises(ParameterError, match=r"base\.psr_threshold"):
+        TrackerParams(base=KCFParams(psr_threshold=-1.0)).validate()
 
 
 def test_percentiles_equal_np_percentile() -> None:
@@ -148,7 +147,7 @@ def test_fused_stretch_equals_the_numpy_passes(
     frames (8 bit, and widened to 16 bit as a SWIR camera would give them) over several frames (EMA)."""
     import cv2
 
-    from swir_tracker_ros.core import fhog
+    from swir_tracker_ros.core import kernels
 
     pngs = sorted((sequences_dir / "ptbtir_airplane").glob("*.png"))[:6]
     frames = [cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in pngs]
@@ -156,7 +155,7 @@ def test_fused_stretch_equals_the_numpy_passes(
         frames = [(f.astype(np.uint16) * 37 + 20000).astype(np.uint16) for f in frames]
     outs = {}
     for jit in (True, False):
-        monkeypatch.setattr(fhog, "USE_JIT", jit)
+        monkeypatch.setattr(kernels, "USE_JIT", jit)
         cond = FrameConditioner(ConditioningConfig(stretch=stretch))
         outs[jit] = [cond(f) for f in frames]
     for a, b in zip(outs[True], outs[False]):

@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core import features, fhog
+from swir_tracker_ros.core import features, fhog, kernels
 from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
 from swir_tracker_ros.core.windows import SCALE_FACTORS, scale_windows, template_size
 from swir_tracker_ros.types import Box
@@ -35,16 +35,16 @@ SEQS = ("otb_jogging-1", "ptbtir_airplane", "otb_crossing", "vottir2015_horse")
 @pytest.fixture(params=["jit", "numpy"])
 def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
     """Run the test on the compiled FHOG loops and on the numpy fallback."""
-    monkeypatch.setattr(fhog, "USE_JIT", request.param == "jit")
+    monkeypatch.setattr(kernels, "USE_JIT", request.param == "jit")
     return request.param
 
 
 def test_the_compiled_path_is_installed_and_used() -> None:
     """numba is pinned in requirements.txt: the tracker must not silently run the numpy fallback."""
-    assert fhog.USE_JIT and fhog._jit() is not None
+    assert kernels.USE_JIT and kernels.fhog_jit() is not None
     assert fhog.warm_up()
-    kernels = (fhog._jit().cell_histograms_kernel, fhog._jit().normalise_kernel)
-    assert all(k.signatures for k in kernels)  # compiled (or loaded from the cache) by warm_up
+    loops = (kernels.fhog_jit().cell_histograms_kernel, kernels.fhog_jit().normalise_kernel)
+    assert all(k.signatures for k in loops)  # compiled (or loaded from the cache) by warm_up
 
 
 def frames_and_boxes(seq: Path, picks: tuple[int, ...] = (0, 40, 80)) -> list[tuple[np.ndarray, Box]]:

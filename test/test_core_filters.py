@@ -149,9 +149,8 @@ def test_filter_params_validate() -> None:
 
 def test_large_targets_are_tracked_at_half_resolution() -> None:
     from swir_tracker_ros.core.filters import make_filter
-    from swir_tracker_ros.core.params import TrackerParams
 
-    small, large = make_filter(TrackerParams(), 40, 80), make_filter(TrackerParams(), 100, 120)
+    small, large = make_filter(KCFParams(), 40, 80), make_filter(KCFParams(), 100, 120)
     assert small.model_scale == 1.0 and (small.tw, small.th) == (100, 200)
     assert large.model_scale == 0.5 and (large.tw, large.th) == (124, 152)  # 2.5 x box / 2, whole cells
 
@@ -184,12 +183,9 @@ def test_grid_features_cut_from_the_union_match_single_windows(feature: str) -> 
     """The 3x3 grid's maps come from one feature computation on the union; away from the window borders
     (where FHOG's block normalisation sees different neighbours) they equal per-window features."""
     from swir_tracker_ros.core.filters import make_filter
-    from swir_tracker_ros.core.params import TrackerParams
 
     img = textured(300, 360, seed=4)
-    params = TrackerParams()
-    params.kcf.feature = feature
-    bank = make_filter(params, 22.0, 44.0)
+    bank = make_filter(KCFParams(feature=feature), 22.0, 44.0)
     window = search_window(181.3, 149.7, 22.0 * 1.04, 44.0 * 1.04, bank.padding)
     grid, wins = bank.grid_features(img, window, 1.0 / 3.0)
     assert len(wins) == 9 and wins[4] == window

@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core import base, confidence, fhog, kcf
+from swir_tracker_ros.core import base, confidence, fhog, kcf, kernels
 from swir_tracker_ros.core.conditioning import presmooth
 from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.tracker import Tracker, TrackerParams
@@ -27,9 +27,9 @@ SEQ = "otb_jogging-1"  # a full occlusion by a pole around frame 70
 
 
 def test_the_compiled_correlation_loops_are_installed_and_used() -> None:
-    assert fhog.corr_jit() is not None
+    assert kernels.corr_jit() is not None
     assert fhog.warm_up()
-    cj = fhog.corr_jit()
+    cj = kernels.corr_jit()
     assert cj.channel_sum_kernel.signatures and cj.cut_windows_kernel.signatures
 
 
@@ -43,12 +43,14 @@ def _frames(sequences_dir: Path, n: int) -> tuple[list[np.ndarray], Box]:
 def _run(frames: list[np.ndarray], box: Box) -> list[tuple]:
     """Track with the lattice on every frame from frame 20; per frame the whole TrackResult as a tuple. The
     whole lattice in full every frame (no checkerboard, no principal-channel screen): the most windows."""
-    trk = Tracker(TrackerParams(lattice_alternate=0, lattice_channels=0))
+    params = TrackerParams()
+    params.redetection.lattice_alternate = params.redetection.lattice_channels = 0
+    trk = Tracker(params)
     trk.init(frames[0], box)
     out = []
     for k, f in enumerate(frames[1:]):
         if k == 20:
-            trk._bank.fp.psr_threshold = 100.0  # every frame fails: re-detection lattice (rings widen)
+            params.base.psr_threshold = 100.0  # every frame fails: re-detection lattice (rings widen)
         r = trk.update(f)
         out.append((r.box, r.state, r.peak, r.psr, r.apce, r.huber_threshold, r.search_mode))
         out.append(r.search_windows)
@@ -109,7 +111,7 @@ def test_analyse_batch_equals_analyse_on_random_responses(dtype: type, shape: tu
 
 
 def test_cross_spectrum_kernel_equals_einsum(recorded: dict) -> None:
-    cj = fhog.corr_jit()
+    cj = kernels.corr_jit()
     for xf, z, _ in recorded["respond"][::5]:
         zf = kcf.rfft2(z)
         assert zf.dtype == xf.dtype == np.complex64
@@ -127,11 +129,11 @@ def test_cross_spectrum_kernel_equals_einsum(recorded: dict) -> None:
 def test_cut_windows_kernel_equals_numpy_slices(recorded: dict) -> None:
     for filt, img, window, sx, sy, offsets, bounds, want in recorded["union"][::4]:
         for jit in (True, False):
-            fhog.USE_JIT = jit
+            kernels.USE_JIT = jit
             try:
                 got = filt._union_maps(img, window, sx, sy, offsets, bounds, "test")
             finally:
-                fhog.USE_JIT = True
+                kernels.USE_JIT = True
             np.testing.assert_array_equal(got, want)
 
 
@@ -140,15 +142,15 @@ def test_respond_equals_the_numpy_path(recorded: dict, monkeypatch: pytest.Monke
     for _, z, _ in recorded["respond"][::7]:
         k.train(z[0], 1.0)
         fast = k.respond(z)
-        monkeypatch.setattr(fhog, "USE_JIT", False)
+        monkeypatch.setattr(kernels, "USE_JIT", False)
         slow = k.respond(z)
-        monkeypatch.setattr(fhog, "USE_JIT", True)
+        monkeypatch.setattr(kernels, "USE_JIT", True)
         np.testing.assert_array_equal(fast, slow)
 
 
 def test_tracker_results_equal_on_the_numpy_path(recorded: dict, monkeypatch: pytest.MonkeyPatch) -> None:
     """Whole tracker, lattice included: the compiled loops (FHOG and correlation) against numpy only."""
-    monkeypatch.setattr(fhog, "USE_JIT", False)
+    monkeypatch.setattr(kernels, "USE_JIT", False)
     assert _run(recorded["frames"], recorded["box"]) == recorded["results"]
 
 
@@ -172,9 +174,9 @@ def test_gaussian_correlation_equals_the_einsum_path(recorded: dict, monkeypatch
         zz = np.einsum("nchw,nchw->n", z, z)
         args = (zf, zz, xf, float(zz[0]), 0.5, z.shape[-2:])
         fast = kcf.gaussian_correlation(*args)
-        monkeypatch.setattr(fhog, "USE_JIT", False)
+        monkeypatch.setattr(kernels, "USE_JIT", False)
         slow = kcf.gaussian_correlation(*args)
-        monkeypatch.setattr(fhog, "USE_JIT", True)
+        monkeypatch.setattr(kernels, "USE_JIT", True)
         np.testing.assert_array_equal(fast, slow)
 
 

@@ -16,12 +16,12 @@ import cv2
 import numpy as np
 import pytest
 
+from swir_tracker_ros.configs import configuration
 from swir_tracker_ros.core import base, kcf
 from swir_tracker_ros.core.filters import make_filter
-from swir_tracker_ros.core.params import TrackerParams
 from swir_tracker_ros.core.windows import is_smooth, nearest_smooth_count, template_size
 from swir_tracker_ros.errors import ParameterError
-from swir_tracker_ros.tracker import Tracker
+from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box
 
 
@@ -58,14 +58,14 @@ def test_template_size_exact_is_the_rounded_window_and_smooth_sizes_are_fft_frie
 @pytest.mark.parametrize("pipeline", ["kcf", "dcf_ca", "bacf"])
 def test_filters_follow_the_smooth_template(pipeline: str) -> None:
     """Feature shape, label scale and (BACF) filter support all follow the smooth template; exact (default)
-    keeps the papers' geometry for every variant."""
+    keeps the papers' geometry for every base filter."""
     w, h = 34.0, 84.0  # OTB skating1: exact 21 x 52 cells (52 = 4 x 13)
-    exact = make_filter(TrackerParams(pipeline=pipeline), w, h)
-    assert TrackerParams().filter_params().fft_sizes == "exact"
-    p = TrackerParams(pipeline=pipeline)
-    p.filter_params().fft_sizes = "smooth7"
+    exact = make_filter(configuration("measured", pipeline).base, w, h)
+    assert TrackerParams().base.fft_sizes == "exact"
+    p = configuration("measured", pipeline)
+    p.base.fft_sizes = "smooth7"
     p.validate()
-    smooth = make_filter(p, w, h)
+    smooth = make_filter(p.base, w, h)
     rows, cols = smooth.shape[1:]
     assert is_smooth(rows, 7) and is_smooth(cols, 7)
     assert (smooth.th // smooth.cell, smooth.tw // smooth.cell) == (rows, cols)
@@ -76,7 +76,7 @@ def test_filters_follow_the_smooth_template(pipeline: str) -> None:
         assert r1 - r0 == math.floor(h * smooth.model_scale * ky / smooth.cell)
         assert c1 - c0 == math.floor(w * smooth.model_scale * kx / smooth.cell)
     bad = TrackerParams()
-    bad.kcf.fft_sizes = "prime"
+    bad.base.fft_sizes = "prime"
     with pytest.raises(ParameterError, match="fft_sizes"):
         bad.validate()
 
@@ -98,16 +98,16 @@ def _iou(a: Box, b: Box) -> float:
 def test_a_smooth_template_still_tracks_a_real_sequence(sequences_dir: Path, mode: str) -> None:
     frames, box, gt = _sequence(sequences_dir, "otb_crossing", 60)  # exact 11 x 31 cells -> 12 x 32
     p = TrackerParams()
-    p.kcf.fft_sizes = mode
+    p.base.fft_sizes = mode
+    assert make_filter(p.base, box.w, box.h).shape[1:] == (32, 12)
     trk = Tracker(p)
     trk.init(frames[0], box)
-    assert trk._bank.shape[1:] == (32, 12)
     ious = [_iou(trk.update(f).box, g) for f, g in zip(frames[1:], gt[1:])]
     assert np.mean(ious) > 0.6 and min(ious) > 0.3
 
 
 def _track(frames: list[np.ndarray], box: Box, pipeline: str) -> list[tuple]:
-    trk = Tracker(TrackerParams(pipeline=pipeline))
+    trk = Tracker(configuration("measured", pipeline))
     trk.init(frames[0], box)
     out = []
     for f in frames[1:]:

@@ -35,8 +35,8 @@ def test_tracker_feature_default_is_the_code_default() -> None:
     """The drift the issue found: the doc said 'hog' while the code and params file said 'hog_soft'."""
     text = (REPO / "docs" / "tracker_node.md").read_text()
     rows = markdown_rows(TrackerParams, "tracker.")
-    row = next(r for r in rows if r.startswith("| `tracker.kcf.feature` |"))
-    assert f"`{TrackerParams().kcf.feature!r}`" in row and row in text
+    row = next(r for r in rows if r.startswith("| `tracker.base.feature` |"))
+    assert f"`{TrackerParams().base.feature!r}`" in row and row in text
 
 
 @dataclass

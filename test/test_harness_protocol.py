@@ -245,9 +245,9 @@ def test_set_overrides_tracker_parameters():
     from swir_tracker_ros.errors import HarnessError
     from swir_tracker_ros.harness.evaluate import _set_path, tracker_params
 
-    p = tracker_params("robust_adaptive", None, ["kcf.padding=2.0", "variant=kalman"])
-    assert p.kcf.padding == 2.0 and p.variant == "kalman"
-    for bad in (["kcf.padding=-1"], ["no_such=1"], ["kcf.padding"], ["kcf.padding=[1"]):
+    p = tracker_params("robust_adaptive", None, ["base.padding=2.0", "occlusion.max_frames=9"])
+    assert p.base.padding == 2.0 and p.occlusion.max_frames == 9
+    for bad in (["base.padding=-1"], ["no_such=1"], ["base.padding"], ["base.padding=[1"]):
         with pytest.raises(HarnessError):
             tracker_params("robust_adaptive", None, bad)
 

@@ -14,10 +14,14 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.params import TrackerParams
+from swir_tracker_ros.configs import configuration
+from swir_tracker_ros.core.base import BaseFilter
+from swir_tracker_ros.core.dcf_ca import DCFCAParams
+from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.scale import DSSTParams, ScaleFilter, scale_patches
 from swir_tracker_ros.errors import ParameterError
-from swir_tracker_ros.tracker import Tracker
+from swir_tracker_ros.policies.scale_search import ScaleSearch
+from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackState
 
 
@@ -59,7 +63,7 @@ def test_scale_patches_replicate_the_border_and_resample_to_the_model_size() -> 
 
 def test_even_scale_count_is_refused() -> None:
     p = TrackerParams()
-    p.kcf.dsst.n_scales = 32
+    p.base.dsst.n_scales = 32
     with pytest.raises(ParameterError, match=r"dsst\.n_scales"):
         p.validate()
 
@@ -67,13 +71,13 @@ def test_even_scale_count_is_refused() -> None:
 def test_default_is_the_scale_search(sequences_dir: Path) -> None:
     """The option changes nothing unless chosen: one detection per scaled window, no scale filter."""
     p = TrackerParams()
-    assert p.kcf.scale_estimator == "search" and p.dcf_ca.scale_estimator == "search"
+    assert p.base.scale_estimator == "search" and DCFCAParams().scale_estimator == "search"
     img, box = real_frame(sequences_dir, "otb_crossing", 10)
-    trk = Tracker(p)
-    trk.init(img, box)
-    assert trk._bank.scale_filter is None
+    bank = make_filter(p.base, box.w, box.h)
+    bank.initialise(img, box)
+    assert bank.scale_filter is None
     wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in (0.95, 1.0, 1.05)]
-    dets = trk._bank.detect(img, wins, [0.95, 1.0, 1.05])
+    dets = bank.detect(img, wins, [0.95, 1.0, 1.05])
     assert [d.window for d in dets] == wins and [d.scale for d in dets] == [0.95, 1.0, 1.05]
 
 
@@ -87,8 +91,8 @@ def test_tracker_with_dsst_follows_a_zoom(sequences_dir: Path, pipeline: str) ->
     size and reports `tracking`; each detect call returns one detection per window (the same one)."""
     img, box = real_frame(sequences_dir, "otb_crossing", 10)
     frames = zoom_sequence(img, box, 25, 1.015)
-    p = TrackerParams(pipeline=pipeline)
-    p.filter_params().scale_estimator = "dsst"
+    p = configuration("measured", pipeline)
+    p.base.scale_estimator = "dsst"
     trk = Tracker(p)
     trk.init(frames[0], box)
     for f in frames[1:]:
@@ -97,7 +101,9 @@ def test_tracker_with_dsst_follows_a_zoom(sequences_dir: Path, pipeline: str) ->
     assert r.state is TrackState.TRACKING
     assert abs(r.box.w / box.w / true - 1.0) < 0.05 and abs(r.box.h / box.h / true - 1.0) < 0.05, r.box
     assert abs(r.box.cx - box.cx) < 3.0 and abs(r.box.cy - box.cy) < 3.0
-    bank = trk._bank
+    bank = make_filter(p.base, box.w, box.h)
+    bank.initialise(frames[0], box)
+    bank.start_memory()
     wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in (0.95, 1.0, 1.05)]
     dets = bank.detect(frames[-1], wins, [0.95, 1.0, 1.05])
     assert len(dets) == 3 and dets[0] is dets[1] is dets[2] and dets[0].window == wins[1]
@@ -127,10 +133,11 @@ def test_the_scale_climb_picks_what_the_full_search_picks(sequences_dir: Path, s
     middle), the same winner, peak and memory score as the full search, from fewer windows when the
     predicted size is right."""
     img, box = real_frame(sequences_dir, seq, 10)
-    trk = Tracker(TrackerParams())
-    trk.init(img, box)
-    bank, p = trk._bank, trk.params
-    factors = p.scale_factors()
+    p = TrackerParams()
+    bank = make_filter(p.base, box.w, box.h)
+    bank.initialise(img, box)
+    bank.start_memory()
+    factors = ScaleSearch(p.scale).normal
     counted: list[int] = []
     orig = bank.features
     bank.features = lambda im, wins: counted.append(len(wins)) or orig(im, wins)  # type: ignore[method-assign]
@@ -138,11 +145,11 @@ def test_the_scale_climb_picks_what_the_full_search_picks(sequences_dir: Path, s
     for z in (0.86, 0.9, 0.95, 1.0, 1.05, 1.11, 1.16):
         frame = zoom(img, box.cx, box.cy, z)
         wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in factors]
-        full, best, first = bank.detect_scales(frame, wins, factors, p.scale_penalty, climb=False)
+        full, best, first = bank.detect_scales(frame, wins, factors, p.scale.penalty, climb=False)
         assert first == 0 and len(full) == 5
         full_memory = bank.memory_score(best)
         counted.clear()
-        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale_penalty, climb=True)
+        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale.penalty, climb=True)
         assert lo + b == best, z
         for d, f in zip(dets, full[lo : lo + len(dets)]):  # float32 sums of other batch sizes: rounding
             assert d.window == f.window and d.peak == pytest.approx(f.peak, rel=1e-4)
@@ -150,7 +157,7 @@ def test_the_scale_climb_picks_what_the_full_search_picks(sequences_dir: Path, s
         assert bank.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
         assert sum(counted) == len(dets) < 5 or best in (0, 4), (z, counted)
         # a best peak below the floor (a frame unlike the tracked ones): every window, the full search's pick
-        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale_penalty, climb=True, floor=math.inf)
+        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale.penalty, climb=True, floor=math.inf)
         assert (len(dets), lo, b) == (5, 0, best) and [d.window for d in dets] == wins
         assert bank.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
         picked.add(best)
@@ -165,13 +172,21 @@ def test_the_scale_climb_tracks_a_real_sequence_as_the_full_search(sequences_dir
     gt = Box(*map(float, (sequences_dir / "otb_crossing" / "gt.txt").read_text().split()[0].split(",")))
     frames = [cv2.imread(str(f), cv2.IMREAD_GRAYSCALE) for f in pngs]
     results, windows = {}, {}
+    orig = BaseFilter.features
     for climb in (True, False):
-        trk = Tracker(TrackerParams(scale_climb=climb))
+        p = TrackerParams()
+        p.scale.climb = climb
+        trk = Tracker(p)
         trk.init(frames[0], gt)
         n = [0]
-        orig = trk._bank.features
-        trk._bank.features = lambda im, w, o=orig, n=n: n.__setitem__(0, n[0] + len(w)) or o(im, w)  # type: ignore[method-assign]
-        results[climb] = [trk.update(f) for f in frames[1:]]
+
+        def counting(self, im, w, n=n):
+            n[0] += len(w)
+            return orig(self, im, w)
+
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(BaseFilter, "features", counting)
+            results[climb] = [trk.update(f) for f in frames[1:]]
         windows[climb] = n[0] / (len(frames) - 1)
     for a, b in zip(results[True], results[False]):
         assert a.state == b.state and a.search_mode == b.search_mode

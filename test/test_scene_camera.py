@@ -109,7 +109,7 @@ def test_scene_family_variants_are_harder_as_documented(demo_scene) -> None:
     first, _ = shake.world.render(0.3, view)
     assert np.array_equal(again, first)
     with pytest.raises(SceneError, match="unknown"):
-        from swir_tracker_ros.scene.demo_scene import demo_world
+        from swir_tracker_ros.scene.demo_world import demo_world
 
         demo_world(7, variant="nope")
 

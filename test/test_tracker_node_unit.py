@@ -21,9 +21,9 @@ from msg_adapters.geometry import box_from_polygon, pan_tilt_error_from_msg
 from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
+from swir_tracker_ros.configs import DEFAULT_CONFIGURATION, ConfigurationChoice
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import reported_publishers
-from swir_tracker_ros.nodes.ros_params import _construct
 from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode, params_yaml
 from swir_tracker_ros.nodes.tracker_node_params import (
     FORMAT_CHANGE_FRAMES,
@@ -31,7 +31,7 @@ from swir_tracker_ros.nodes.tracker_node_params import (
     HeadPoseHistory,
     TrackerNodeParams,
 )
-from swir_tracker_ros.paramfield import flat_fields
+from swir_tracker_ros.paramfield import flat_fields, rebuild
 from swir_tracker_ros.tracker import TrackerParams
 from swir_tracker_ros.types import TrackState
 
@@ -172,13 +172,15 @@ def test_runtime_parameter_changes(context: Context) -> None:
     node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
     try:
         feed(node, scene(100, 96), 1.0)
-        assert not node.set_parameters([Parameter("tracker.kcf.psr_threshold", value=-1.0)])[0].successful
-        res = node.set_parameters([Parameter("tracker.pipeline", value="nope")])[0]
+        assert not node.set_parameters([Parameter("tracker.base.psr_threshold", value=-1.0)])[0].successful
+        res = node.set_parameters([Parameter("tracker.base.feature", value="nope")])[0]
         assert not res.successful and "nope" in res.reason
         assert not node.set_parameters([Parameter("init_box", value=[1.0, 2.0])])[0].successful
         assert not node.set_parameters([Parameter("image_topic", value="/x")])[0].successful
-        assert node.set_parameters([Parameter("tracker.pipeline", value="dcf_ca")])[0].successful
-        assert node.tracker.params.pipeline == "dcf_ca" and node.pending_init is not None
+        # the configuration is chosen at start-up (read-only); its parameters change at run time
+        assert not node.set_parameters([Parameter("tracker.configuration", value="cf")])[0].successful
+        assert node.set_parameters([Parameter("tracker.memory.ratio", value=0.4)])[0].successful
+        assert node.tracker.params.memory.ratio == 0.4 and node.pending_init is not None
         feed(node, scene(100, 96), 1.04)
         assert node.tracker.state is TrackState.TRACKING
     finally:
@@ -255,11 +257,13 @@ def test_params_file_and_docs_list_every_parameter() -> None:
     doc = yaml.safe_load((REPO / "params" / "tracker.yaml").read_text())["/**"]["ros__parameters"]
     core = doc.pop("tracker")
     docs = (REPO / "docs" / "tracker_node.md").read_text()
+    choice = {k: core.pop(k) for k in ("configuration", "base_filter")}
+    assert ConfigurationChoice(**choice) == ConfigurationChoice()
     for prefix, cls, values in (("", TrackerNodeParams, doc), ("tracker.", TrackerParams, core)):
         names = {name for name, _, _ in flat_fields(cls)}
         hint = f"{cls.__name__}: run `tracker --params-yaml > params/tracker.yaml`"
         assert set(_flatten(values)) == names, hint
-        _construct(cls, _flatten(values)).validate()
+        rebuild(cls(), _flatten(values)).validate()
         missing = [n for n in names if f"`{prefix}{n}`" not in docs]
         assert not missing, f"docs/tracker_node.md lacks {missing}"
 
@@ -275,7 +279,8 @@ def test_generated_params_yaml_loads_back_to_the_defaults() -> None:
     doc = yaml.safe_load(params_yaml())["/**"]["ros__parameters"]
     core = doc.pop("tracker")
     assert TrackerNodeParams(**doc) == TrackerNodeParams()
-    assert _construct(TrackerParams, _flatten(core)) == TrackerParams()
+    assert (core.pop("configuration"), core.pop("base_filter")) == (DEFAULT_CONFIGURATION, "")
+    assert rebuild(TrackerParams(), _flatten(core)) == TrackerParams()
 
 
 def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:

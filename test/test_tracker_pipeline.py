@@ -1,16 +1,21 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The full Tracker: scale, occlusion and re-detection, gated updates, variants, bad input, real data."""
+"""The full Tracker: scale, occlusion, re-detection, gated updates, configurations, bad input, real data."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
+from swir_tracker_ros.configs import configuration
+from swir_tracker_ros.core.conditioning import ConditioningConfig
+from swir_tracker_ros.core.filters import KCFFilter, make_filter
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.kalman import PAPER000_KCF
+from swir_tracker_ros.policies.motion import MotionFilter
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, SearchMode, TrackState
 
@@ -63,8 +68,13 @@ def zoom_scene(n: int = 25, rate: float = 1.02) -> tuple[list[np.ndarray], list[
     return frames, gts
 
 
-def run(variant: str, frames: list[np.ndarray], box: Box, **kw: object) -> list:
-    trk = Tracker(TrackerParams(variant=variant, **kw))
+def run(name: str, frames: list[np.ndarray], box: Box, base: str | None = None,
+        edit: Callable[[TrackerParams], None] | None = None) -> list:
+    """Results of configuration `name` (on `base`), its params changed by `edit`, over `frames`."""
+    params = configuration(name, base)
+    if edit is not None:
+        edit(params)
+    trk = Tracker(params)
     trk.init(frames[0], box)
     return [trk.update(f) for f in frames[1:]]
 
@@ -77,7 +87,7 @@ def scene() -> tuple[list[np.ndarray], list[Box], list[bool]]:
 @pytest.mark.parametrize("pipeline", ["kcf", "dcf_ca"])
 def test_scale_recovery_on_synthetic_zoom(pipeline: str) -> None:
     frames, gts = zoom_scene()
-    res = run("robust_adaptive", frames, gts[0], pipeline=pipeline)
+    res = run("robust_adaptive", frames, gts[0], base=pipeline)
     assert res[-1].scale == pytest.approx(1.02**24, rel=0.06)
     assert res[-1].box.iou(gts[-1]) > 0.8
 
@@ -97,15 +107,33 @@ def test_redetection_after_occlusion_with_direction_change(scene) -> None:
     assert max(cf[i].box.iou(gts[i + 1]) for i in tail) < 0.2
 
 
-def test_model_is_frozen_while_occluded(scene) -> None:
+def test_model_is_frozen_while_occluded(scene, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The filter learns (`BaseFilter.train`, not the memory's `train_memory`) exactly on the frames that
+    report `model_updated`: confident tracked ones, never occluded ones."""
     frames, gts, _ = scene
+    trained, in_memory = [0], [False]
+    train, train_memory = KCFFilter.train, KCFFilter.train_memory
+
+    def counting_train(self, img, box, rate):
+        trained[0] += not in_memory[0]
+        return train(self, img, box, rate)
+
+    def flagged_train_memory(self, img, box, rate):
+        in_memory[0] = True
+        try:
+            return train_memory(self, img, box, rate)
+        finally:
+            in_memory[0] = False
+
+    monkeypatch.setattr(KCFFilter, "train", counting_train)
+    monkeypatch.setattr(KCFFilter, "train_memory", flagged_train_memory)
     trk = Tracker(TrackerParams())
     trk.init(frames[0], gts[0])
     frozen_checked = updated_seen = False
     for f in frames[1:40]:
-        before = trk._bank.filter.model_alphaf.copy()
+        trained[0] = 0
         r = trk.update(f)
-        same = np.array_equal(before, trk._bank.filter.model_alphaf)
+        same = trained[0] == 0
         assert same != r.model_updated
         if r.model_updated:
             updated_seen = True
@@ -128,18 +156,35 @@ def test_variants_behave_as_specified(scene) -> None:
     ada = run("robust_adaptive", frames[:30], gts[0])
     assert all(r.huber_threshold == pytest.approx(PAPER000_KCF(r.peak)) for r in ada)
     assert len({round(r.huber_threshold, 3) for r in ada}) > 2
-    trk = Tracker(TrackerParams(variant="robust_adaptive_r"))
-    trk.init(frames[0], gts[0])
-    R0 = trk._kf.R.copy()
-    for f in frames[1:] + frames[::-1]:
-        trk.update(f)
-    assert not np.array_equal(trk._kf.R[:2, :2], R0[:2, :2])  # adapted after the warm-up
-    assert np.array_equal(trk._kf.R[2:, 2:], R0[2:, 2:])  # size noise stays nominal
+    # adaptive R: the same frames as robust_adaptive until its residual window is full, then other boxes
+    long = frames[1:] + frames[::-1]
+    fixed_r, adapted = run("robust_adaptive", long, gts[0]), run("robust_adaptive_r", long, gts[0])
+    differ = [a.box != b.box for a, b in zip(fixed_r, adapted)]
+    assert not differ[0] and any(differ)
+
+
+def test_adaptive_r_adapts_the_position_noise_only(scene) -> None:
+    """Dissertation eq. 5.95 in the motion filter: R's position block follows the post-fit residuals after
+    the warm-up, its size block stays nominal; without adaptive_r R never changes."""
+    _, gts, _ = scene
+    box = gts[0]
+    bank = make_filter(configuration("robust_adaptive_r").base, box.w, box.h)
+    for name, adapts in (("robust_adaptive_r", True), ("robust", False)):
+        motion = MotionFilter(configuration(name).motion, bank, box)
+        R0 = motion.kf.R.copy()
+        rng = np.random.default_rng(1)
+        for _ in range(60):
+            pred = motion.predict(1.0, 0.0, 0.0)
+            dx, dy = 2.0 + rng.normal(0, 3.0), rng.normal(0, 3.0)
+            z = motion.measurement(pred.cx + dx, pred.cy + dy, box.w, box.h)
+            motion.adapt_noise(z, motion.update(z, motion.threshold(0.6)))
+        assert (not np.array_equal(motion.kf.R[:2, :2], R0[:2, :2])) == adapts
+        assert np.array_equal(motion.kf.R[2:, 2:], R0[2:, 2:])  # size noise stays nominal
 
 
 def test_dcf_ca_pipeline_detects_occlusion_by_apce(scene) -> None:
     frames, gts, _ = scene
-    res = run("robust_adaptive", frames, gts[0], pipeline="dcf_ca")
+    res = run("robust_adaptive", frames, gts[0], base="dcf_ca")
     assert res[0].state is TrackState.TRACKING and res[0].box.iou(gts[1]) > 0.7
     assert any(r.state is TrackState.OCCLUDED for r in res[15:40])
 
@@ -187,7 +232,8 @@ def test_bad_input_is_reported_cleanly(scene) -> None:
 def test_16bit_and_colour_frames_track(scene) -> None:
     frames, gts, _ = scene
     f16 = [f.astype(np.uint16) * 16 + 20000 for f in frames[:8]]
-    res = run("robust_adaptive", f16, gts[0], dead_pixel_threshold=0.2)
+    res = run("robust_adaptive", f16, gts[0],
+              edit=lambda p: setattr(p, "conditioning", ConditioningConfig(dead_pixel_threshold=0.2)))
     assert res[-1].box.iou(gts[7]) > 0.7
     bgr = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames[:8]]
     assert run("robust_adaptive", bgr, gts[0])[-1].box.iou(gts[7]) > 0.7
@@ -222,7 +268,10 @@ def test_real_sequence_crossing_beats_the_bare_filter(sequences_dir: Path) -> No
 
 def test_lost_after_long_occlusion_and_grid_scale_search(scene) -> None:
     frames, gts, _ = scene
-    res = run("robust_adaptive", frames[:45], gts[0], max_occluded_frames=3, grid_scale_search=True)
+    def edit(p: TrackerParams) -> None:
+        p.occlusion.max_frames, p.redetection.grid_scale_search = 3, True
+
+    res = run("robust_adaptive", frames[:45], gts[0], edit=edit)
     states = [r.state for r in res]
     first_lost = states.index(TrackState.LOST)
     assert states[first_lost - 3 : first_lost] == [TrackState.OCCLUDED] * 3
@@ -238,55 +287,59 @@ def test_target_leaving_the_image_is_lost() -> None:
     assert trk.state is TrackState.LOST
 
 
-def trace(variant: str, frames: list[np.ndarray], box: Box) -> list[tuple]:
-    """(result, centre velocity before the update, after it, predicted centre) per frame."""
-    trk = Tracker(TrackerParams(variant=variant))
+def trace(name: str, frames: list[np.ndarray], box: Box) -> list[tuple]:
+    """(result, centre velocity before the update, after it) per frame (`TrackResult.velocity`)."""
+    trk = Tracker(configuration(name))
     trk.init(frames[0], box)
-    out = []
+    out, v0 = [], (0.0, 0.0)  # velocity entering the frame (the prediction keeps it)
     for f in frames[1:]:
-        v0 = trk._kf.x[4:6].copy()  # velocity entering the frame (the prediction keeps it)
         r = trk.update(f)
-        out.append((r, v0, trk._kf.x[4:6].copy()))
+        out.append((r, v0, r.velocity))
+        v0 = r.velocity
     return out
 
 
-@pytest.mark.parametrize("variant", ["kalman", "robust", "robust_adaptive", "robust_adaptive_r"])
-def test_redetection_holds_the_centre_velocity(scene, variant: str) -> None:
+@pytest.mark.parametrize("name", ["kalman", "robust", "robust_adaptive", "robust_adaptive_r"])
+def test_redetection_holds_the_centre_velocity(scene, name: str) -> None:
     """While re-detecting, grid measurements move the centre but never the centre velocity
     (an occlusion feeds only outliers; their clipped updates used to drag the prediction away)."""
     frames, gts, _ = scene
-    steps = trace(variant, frames, gts[0])
+    steps = trace(name, frames, gts[0])
     occluded = [(r, v0, v1) for r, v0, v1 in steps if r.state is TrackState.OCCLUDED]
     tracking = [(r, v0, v1) for r, v0, v1 in steps if r.state is TrackState.TRACKING]
     assert len(occluded) >= 5
-    assert all(np.array_equal(v0, v1) for _, v0, v1 in occluded)
-    assert sum(not np.array_equal(v0, v1) for _, v0, v1 in tracking) > len(tracking) // 2
+    assert all(v0 == v1 for _, v0, v1 in occluded)
+    assert sum(v0 != v1 for _, v0, v1 in tracking) > len(tracking) // 2
 
 
 def test_floor_band_outer_grid_peak_is_no_measurement(scene) -> None:
     """While re-detecting, robust_adaptive takes an outer grid window's peak below eq. 38's first
     breakpoint (PV < 0.25, k at its floor) as no measurement (the filter coasts); the same peak in
     the window at the prediction, or any peak for a fixed threshold (`robust`), moves the centre.
-    The centre velocity is held in every case."""
-    frames, gts, _ = scene
+    The centre velocity is held in every case (`MotionFilter.redetection_update`)."""
+    _, gts, _ = scene
+    box = gts[0]
     z_off = np.array([12.0, -9.0, 0.0, 0.0])  # a detection 12 px right and 9 px up of the prediction
-    for variant, outer, coasts in (("robust_adaptive", True, True), ("robust_adaptive", False, False),
-                                   ("robust_adaptive_r", True, True), ("robust", True, False)):
-        trk = Tracker(TrackerParams(variant=variant))
-        trk.init(frames[0], gts[0])
-        for f in frames[1:8]:
-            trk.update(f)
-        kf = trk._kf
-        kf.predict()
+    for name, outer, coasts in (("robust_adaptive", True, True), ("robust_adaptive", False, False),
+                                ("robust_adaptive_r", True, True), ("robust", True, False)):
+        p = configuration(name)
+        motion = MotionFilter(p.motion, make_filter(p.base, box.w, box.h), box)
+        for k in range(1, 8):  # a walker at 2 px/frame
+            pred = motion.predict(1.0, 0.0, 0.0)
+            z = motion.measurement(box.cx + 2.0 * k, box.cy, box.w, box.h)
+            motion.update(z, motion.threshold(0.6))
+        motion.predict(1.0, 0.0, 0.0)
+        kf = motion.kf
         x0 = kf.x.copy()
         z = kf.H @ x0 + z_off
         peak = 0.2
         assert PAPER000_KCF.at_floor(peak)
-        info = trk._redetection_update(z, trk._threshold(peak), peak, outer)
+        info = motion.redetection_update(z, motion.threshold(peak), peak, outer, weak=False)
         assert info.coasted == coasts
         moved = kf.x[:2] - x0[:2]
         assert np.allclose(moved, 0.0) if coasts else (moved[0] > 0.05 and moved[1] < -0.05)
-        assert np.array_equal(kf.x[4:6], x0[4:6])  # centre velocity held
+        assert np.array_equal(kf.x[4:6], x0[4:6]) and kf.x[4] > 1.0  # centre velocity held (walking)
+    assert pred.is_valid()
 
 
 def test_clutter_scenario_reacquires_the_target_not_the_look_alike() -> None:
@@ -303,7 +356,7 @@ def test_clutter_scenario_reacquires_the_target_not_the_look_alike() -> None:
         frames.append(fr.image)
         gts.append(fr.target.box)
     bits = run_.world.sensor.bits
-    trk = Tracker(TrackerParams(variant="robust_adaptive"))
+    trk = Tracker(configuration("robust_adaptive"))
     trk.init(frames[0], gts[0], bit_depth=bits)
     res = [trk.update(f, bit_depth=bits) for f in frames[1:]]
     assert any(r.state is TrackState.OCCLUDED for r in res[120:140])  # the pole is detected
@@ -317,7 +370,7 @@ def test_frames_argument_advances_the_prediction_over_skipped_frames() -> None:
     frames, gts, _ = occlusion_scene(40)
     starts = {}
     for k in (1.0, 4.0):
-        trk = Tracker(TrackerParams(variant="kalman"))
+        trk = Tracker(configuration("kalman"))
         trk.init(frames[0], gts[0])
         for f in frames[1:20]:  # 2 px/frame to the right, velocity learnt
             trk.update(f)
@@ -352,9 +405,9 @@ def leaving_scene(seed: int, n: int = 80, gone: int = 30) -> tuple[list[np.ndarr
 @pytest.mark.parametrize("seed", [5, 6, 7])
 def test_default_never_reports_tracking_on_background_after_the_target_left(seed: int) -> None:
     """Issue 12 "no false lock": once the target has left, the tracker's box sits on background; the
-    long-term memory (LCT style) of the default variant `measured` rejects it, so no frame is `tracking`.
-    The papers' robust_adaptive reports `tracking` on background here (3-9 of the 49 frames for these
-    seeds)."""
+    long-term memory (LCT style) of the default configuration `measured` rejects it, so no frame is
+    `tracking`. The papers' robust_adaptive reports `tracking` on background here (3-9 of the 49 frames for
+    these seeds)."""
     frames, gts = leaving_scene(seed)
     trk = Tracker(TrackerParams())
     trk.init(frames[0], gts[0])

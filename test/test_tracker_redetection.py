@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Re-detection of the default variant (issue 12 item 4, issue 13): the lattice and re-acquisition rules."""
+"""Re-detection of the default configuration (issue 12 item 4, issue 13): lattice and re-acquisition rules."""
 
 from __future__ import annotations
 
@@ -11,17 +11,26 @@ import numpy as np
 import pytest
 
 from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.harness.evaluate import run_starts
 from swir_tracker_ros.harness.protocol import RunStats
 from swir_tracker_ros.harness.sources import open_source
+from swir_tracker_ros.policies.redetection import Redetection, RedetectionParams
 from swir_tracker_ros.scene.camera import CameraView
-from swir_tracker_ros.scene.demo_scene import CROSSER_ID, build_scene
+from swir_tracker_ros.scene.demo_scene import build_scene
+from swir_tracker_ros.scene.demo_world import CROSSER_ID
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackState
 
 FPS = 25.0
-PAPERS_REDETECTION = {"lattice_step": 0.0, "redetect_peak_ratio": 0.0}  # the 3x3 grid, no peak rule
+
+
+def papers_redetection() -> TrackerParams:
+    """The default with the papers' re-detection: the 3x3 grid (no lattice, so no sweep), no peak rule."""
+    p = TrackerParams()
+    p.redetection.lattice_step, p.occlusion.reacquire_peak_ratio = 0.0, 0.0
+    return p
 
 
 def demo_follow(seed: int, start: int, stop: int, params: TrackerParams, scene: str = "demo",
@@ -66,7 +75,7 @@ def test_demo_pedestrian_is_reacquired_after_stopping_behind_the_wall(seed: int)
     seed 1 at frame 293): the lattice re-acquires within 0.5 s, the grid never before 12 s."""
     def reacquired(params: TrackerParams, fhog_only: bool = False) -> list[int]:
         if fhog_only:
-            params.kcf.feature = "hog_soft"
+            params.base.feature = "hog_soft"
         run = demo_follow(seed, 175, 300, params)
         return [k for k, r, gt in run if k > 250 and r.state is TrackState.TRACKING
                 and abs(r.box.cx - gt.cx) < 0.3 * gt.w and abs(r.box.cy - gt.cy) < 0.3 * gt.h]
@@ -75,7 +84,7 @@ def test_demo_pedestrian_is_reacquired_after_stopping_behind_the_wall(seed: int)
     assert got and got[0] <= 285, got[:3]
     lattice = reacquired(TrackerParams(), fhog_only=True)
     assert lattice and lattice[0] <= 285, lattice[:3]
-    assert not reacquired(TrackerParams(**PAPERS_REDETECTION), fhog_only=True)
+    assert not reacquired(papers_redetection(), fhog_only=True)
 
 
 @pytest.mark.parametrize("seed", [4, 6])
@@ -88,14 +97,16 @@ def test_a_lookalike_crossing_in_front_does_not_take_the_box(seed: int) -> None:
     crossing puts the target once the box has left it by half a box, and the target's peak there (0.58-0.61
     against the crosser's 0.51-0.54, PSR 15-16) takes the box back (measured: on the target from ~5.3 s)."""
     def run(frames: int) -> list:
-        return demo_follow(seed, 0, 165, TrackerParams(lookalike_frames=frames), "demo_crossing", CROSSER_ID)
+        p = TrackerParams()
+        p.lookalike.frames = frames
+        return demo_follow(seed, 0, 165, p, "demo_crossing", CROSSER_ID)
 
     def on(box: Box, other: Box | None) -> bool:
         return other is not None and box.iou(other) > 0.5
 
     off = run(0)
     assert all(on(r.box, c) and r.state is TrackState.TRACKING for _, r, _, c in off[-30:])
-    guarded = run(TrackerParams().lookalike_frames)
+    guarded = run(TrackerParams().lookalike.frames)
     assert all(r.box.iou(gt) > 0.5 and r.state is TrackState.TRACKING for _, r, gt, _ in guarded[-30:])
     assert not any(r.state is TrackState.TRACKING and r.box.iou(gt) == 0.0 for _, r, gt, _ in guarded)
 
@@ -109,34 +120,29 @@ def test_lattice_finds_a_target_midway_between_grid_windows() -> None:
     box = next(tr for tr in truths if tr.id == built.target_id).box
     img = img.astype("float32") / 65535.0
     p = TrackerParams()
-    bank = make_filter(p, box.w, box.h)
+    r = p.redetection
+    bank = make_filter(p.base, box.w, box.h)
     bank.initialise(img, box)
     at = bank.detect(img, [search_window(box.cx, box.cy, box.w, box.h, bank.padding)])[0].peak
     off = search_window(box.cx + box.w * (1.0 + bank.padding) / 3.0, box.cy, box.w, box.h, bank.padding)
-    grid = max(d.peak for d in bank.detect_grid(img, off, p.grid_overlap)[0])
-    lattice, wins = bank.detect_lattice(img, off, p.lattice_step, p.lattice_rings)
+    grid = max(d.peak for d in bank.detect_grid(img, off, r.grid_overlap)[0])
+    lattice, wins = bank.detect_lattice(img, off, r.lattice_step, r.lattice_rings,
+                                        channels=r.lattice_channels)
     best = max(lattice, key=lambda d: d.peak)
     assert best.peak > 0.75 * at > grid
     assert abs(best.cx - box.cx) < 0.25 * box.w
-    assert len(wins) == (2 * p.lattice_rings + 1) ** 2 - 1
+    assert len(wins) == (2 * r.lattice_rings + 1) ** 2 - 1
 
 
 def test_lattice_widens_with_the_frames_since_the_last_confident_frame() -> None:
-    p = TrackerParams(lattice_rings=2, lattice_widen_frames=10, lattice_max_rings=4)
-    trk = Tracker(p)
-    rings = []
-    for occluded in (0, 9, 10, 25, 1000):
-        trk._occluded = occluded
-        rings.append(trk._rings())
-    assert rings == [2, 2, 3, 4, 4]
-    trk.params = TrackerParams(lattice_widen_frames=0)
-    trk._occluded = 1000
-    assert trk._rings() == trk.params.lattice_rings
+    widening = Redetection(RedetectionParams(lattice_rings=2, lattice_widen_frames=10, lattice_max_rings=4))
+    assert [widening.rings(occluded) for occluded in (0, 9, 10, 25, 1000)] == [2, 2, 3, 4, 4]
+    fixed = Redetection(RedetectionParams(lattice_widen_frames=0))
+    assert fixed.rings(1000) == fixed.p.lattice_rings
 
 
 def test_lattice_leaves_out_windows_centred_outside_the_image() -> None:
-    p = TrackerParams()
-    bank = make_filter(p, 20.0, 40.0)
+    bank = make_filter(TrackerParams().base, 20.0, 40.0)
     win = search_window(5.0, 5.0, 20.0, 40.0, bank.padding)
     _sx, _sy, offsets, wins = bank.lattice_geometry(win, 0.35, 2, (320, 240))
     assert (0, 0) not in offsets
@@ -146,7 +152,7 @@ def test_lattice_leaves_out_windows_centred_outside_the_image() -> None:
 
 def test_lattice_checkerboard_halves_cover_the_outer_rings_on_alternate_frames() -> None:
     """`lattice_alternate` 2: ring 1 in both halves, rings 2-3 split into two disjoint checkerboards."""
-    bank = make_filter(TrackerParams(), 20.0, 40.0)
+    bank = make_filter(TrackerParams().base, 20.0, 40.0)
     win = search_window(400.0, 400.0, 20.0, 40.0, bank.padding)
     full = bank.lattice_geometry(win, 0.35, 3)[2]
     halves = [bank.lattice_geometry(win, 0.35, 3, half=(2, parity))[2] for parity in (0, 1)]
@@ -166,14 +172,15 @@ def test_a_target_two_lattice_steps_away_is_found_by_the_half_that_holds_its_win
     box = next(tr for tr in truths if tr.id == built.target_id).box
     img = img.astype("float32") / 65535.0
     p = TrackerParams()
-    bank = make_filter(p, box.w, box.h)
+    step, channels = p.redetection.lattice_step, p.redetection.lattice_channels
+    bank = make_filter(p.base, box.w, box.h)
     bank.initialise(img, box)
     centred = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
     at = bank.detect(img, [centred])[0].peak
-    sx = bank.lattice_geometry(centred, p.lattice_step, 2)[0]
+    sx = bank.lattice_geometry(centred, step, 2)[0]
     off = centred.shifted(-2 * sx * bank.cell * centred.w / bank.tw, 0.0)
-    found = [max(bank.detect_lattice(img, off, p.lattice_step, 2, half=(2, k))[0], key=lambda d: d.peak)
-             for k in (0, 1)]
+    found = [max(bank.detect_lattice(img, off, step, 2, half=(2, k), channels=channels)[0],
+                 key=lambda d: d.peak) for k in (0, 1)]
     assert found[0].peak > 0.9 * at
     assert abs(found[0].cx - box.cx) < 0.1 * box.w
     assert found[1].peak < found[0].peak
@@ -188,16 +195,16 @@ def test_the_principal_channel_screen_keeps_the_full_lattice_winner(steps: tuple
     img, truths = built.world.render(0.0, CameraView(0.0, 0.0, 8.0))
     box = next(tr for tr in truths if tr.id == built.target_id).box
     img = img.astype("float32") / 65535.0
-    full_bank = make_filter(TrackerParams(lattice_channels=0), box.w, box.h)
-    screened = make_filter(TrackerParams(lattice_channels=8), box.w, box.h)
+    full_bank = make_filter(KCFParams(), box.w, box.h)
+    screened = make_filter(KCFParams(), box.w, box.h)
     centred = search_window(box.cx, box.cy, box.w, box.h, full_bank.padding)
     best, counts = [], []
-    for bank in (full_bank, screened):
+    for bank, channels in ((full_bank, 0), (screened, 8)):
         bank.initialise(img, box)
         sx, sy = bank.lattice_geometry(centred, 0.35, 3)[:2]
         k = bank.cell * centred.w / bank.tw
         off = centred.shifted(-steps[0] * sx * k, -steps[1] * sy * bank.cell * centred.h / bank.th)
-        dets, wins = bank.detect_lattice(img, off, 0.35, 3)
+        dets, wins = bank.detect_lattice(img, off, 0.35, 3, channels=channels)
         best.append(max(dets, key=lambda d: d.peak))
         counts.append(len(dets))
     assert counts == [len(wins), 3] and len(wins) > 3  # every window in full, then the 3 screened ones
@@ -209,39 +216,26 @@ def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
     """Synthetic x_low_contrast_interlaced from the SRE start shifted to the top left: while the walker is
     hidden, the occluder's vertical edge gives a non-failed response (PSR 7-9, peak and memory score just
     over their bars) and was taken back as the target: 190 frames `tracking` on the wall (measured). With
-    `redetect_psr` 12 (the default; the failure test fires below 7) such a frame stays `occluded`: no
+    `reacquire_psr` 12 (the default; the failure test fires below 7) such a frame stays `occluded`: no
     false-tracking frame (measured). (The long-loss sweep, on by default, finds the walker again from this
     start: `test_the_sweep_finds_the_walker_the_occluders_edge_held_the_box_from`.)"""
     src = open_source("synth:x_low_contrast_interlaced")
 
     def stats(psr: float) -> RunStats:
-        factory = lambda: Tracker(TrackerParams(redetect_psr=psr, sweep_after=0))  # noqa: E731
+        p = TrackerParams(sweep=None)
+        p.occlusion.reacquire_psr = psr
+        factory = lambda: Tracker(p)  # noqa: E731
         return RunStats.of(run_starts(src, factory, starts=("top_left",))["top_left"], src.fps)
 
     off, on = stats(0.0), stats(12.0)
     assert off.false_tracking > 100 and on.false_tracking == 0, (off, on)
 
 
-def test_the_papers_variants_ignore_the_ninth_pass_rules() -> None:
-    """`redetect_psr`, `size_rate_peak_ratio`, the look-alike guard, the scale climb, the long-loss sweep,
-    the pre-smoothed frame and the rejected frames' size are rules of variant `measured`: the papers'
-    pipelines (here `robust_adaptive`, paper 000) give the same boxes and states whatever their values."""
-    src = open_source("synth:t1_full_static_size")
-
-    def run(**kw: float) -> tuple[list, list]:
-        factory = lambda: Tracker(TrackerParams(variant="robust_adaptive", **kw))  # noqa: E731
-        r = run_starts(src, factory, starts=("left",))["left"]
-        return r.pred, r.states
-
-    assert run(redetect_psr=0.0, size_rate_peak_ratio=0.0, lookalike_frames=0, scale_climb=False,
-               sweep_after=0, presmooth=0.0, rejected_size="measured") == run(
-        redetect_psr=50.0, size_rate_peak_ratio=2.0, lookalike_frames=30, scale_climb=True, sweep_after=1,
-        presmooth=0.1, rejected_size="held")
-
-
 def sweep_stats(name: str, start: str, sweep_after: int) -> tuple[RunStats, list[TrackState]]:
     src = open_source(f"synth:{name}")
-    factory = lambda: Tracker(TrackerParams(sweep_after=sweep_after))  # noqa: E731
+    p = TrackerParams()
+    p.sweep.after = sweep_after
+    factory = lambda: Tracker(p)  # noqa: E731
     run = run_starts(src, factory, starts=(start,))[start]
     return RunStats.of(run, src.fps), run.states
 

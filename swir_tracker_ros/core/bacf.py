@@ -37,7 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft as sfft
 
-from swir_tracker_ros.core.kcf import KCFParams, gaussian_label_spectrum, irfft2, rfft2
+from swir_tracker_ros.core.fft import gaussian_label_spectrum, irfft2, rfft2
+from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
@@ -58,7 +59,7 @@ class BACFParams(KCFParams):
     feature: str = _f(
         "hog_soft",
         "filter features (choices as kcf.feature): soft FHOG, what BACF was measured with here "
-        "(docs/tracking_core.md); hog_gray is the BACF paper's HOG + grayscale (with it the pipeline test "
+        "(docs/experiments.md); hog_gray is the BACF paper's HOG + grayscale (with it the pipeline test "
         "on OTB crossing went `occluded` at frame 30: not tuned for it)",
         choices=KCFParams.__dataclass_fields__["feature"].metadata["choices"],
     )
@@ -70,7 +71,7 @@ class BACFParams(KCFParams):
     window_shape: str = _f(
         "proportional",
         "proportional: (1 + padding) x the target's width and height, as kcf (better here under SRE: "
-        "docs/tracking_core.md); square: a square of the same area, side (1 + padding) sqrt(w h) (BACF "
+        "docs/experiments.md); square: a square of the same area, side (1 + padding) sqrt(w h) (BACF "
         "reference: search_area_shape square)",
         choices=("square", "proportional"),
     )

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swir_tracker_ros.core.fhog import corr_jit
+from swir_tracker_ros.core.kernels import corr_jit
 
 
 def cell_means(planes: np.ndarray, cell: int) -> np.ndarray:

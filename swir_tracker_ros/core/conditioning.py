@@ -9,8 +9,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from swir_tracker_ros.core.fhog import corr_jit
-from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.core.kernels import corr_jit
+from swir_tracker_ros.errors import ParameterError, TrackerError
+from swir_tracker_ros.paramfield import param
 
 
 class ConditioningError(TrackerError):
@@ -19,19 +20,32 @@ class ConditioningError(TrackerError):
 
 @dataclass(frozen=True)
 class ConditioningConfig:
-    """How raw frames become the float32 [0, 1] gray image the filters see.
+    """How raw frames become the float32 [0, 1] gray image the filters see (the `conditioning` parameters of
+    the tracker)."""
 
-    stretch: "auto" stretches 16-bit and float input by percentiles, passes 8-bit through (/255);
-    "always" also stretches 8-bit; "off" only divides by the full scale of the bit depth.
-    """
+    stretch: str = param(
+        "auto",
+        "intensity stretch: auto (16-bit and float by percentiles, 8-bit divided by 255), always (8-bit "
+        "too), off (divided by the full scale of the bit depth)",
+        choices=("auto", "always", "off"),
+    )
+    low_percentile: float = param(0.5, "black level percentile of the stretch", 0.0, 49.0)
+    high_percentile: float = param(99.5, "white level percentile of the stretch", 51.0, 100.0)
+    stretch_smoothing: float = param(0.8, "(ours) EMA weight of the previous stretch limits", 0.0, 0.99)
+    dead_pixel_threshold: float = param(
+        0.0, "replace pixels further than this (0..1) from their 3x3 median; 0: off", 0.0, 1.0
+    )
+    deinterlace: str = param(
+        "off", "use one field of interlaced frames, line-doubled", choices=("off", "even", "odd")
+    )
+    downscale: float = param(
+        1.0, "resize frames by this factor before tracking (boxes stay in input pixels)", 0.1, 1.0
+    )
 
-    stretch: str = "auto"
-    low_percentile: float = 0.5
-    high_percentile: float = 99.5
-    stretch_smoothing: float = 0.8  # EMA weight of the previous stretch limits (0: per-frame limits)
-    dead_pixel_threshold: float = 0.0  # 0: off; else |x - median3x3| above this (in [0,1] units) is replaced
-    deinterlace: str = "off"  # "off", "even" (keep even rows), "odd" (keep odd rows)
-    downscale: float = 1.0  # frame resize factor applied before tracking (1.0: off)
+    def check(self) -> None:
+        """Cross-field rules (run by `validate_params` after the fields)."""
+        if self.low_percentile >= self.high_percentile:
+            raise ParameterError("parameter low_percentile must be below high_percentile")
 
 
 def presmooth(img: np.ndarray, sigma: float) -> np.ndarray:

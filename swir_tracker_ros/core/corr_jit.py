@@ -2,7 +2,8 @@
 """Compiled (numba) loops of the correlation filters' hot path outside the FFTs (issue 17).
 
 Used by core/kcf.py (`gaussian_correlation`) and core/base.py (`_union_maps`) when numba is importable
-and `fhog.USE_JIT` is on (the same switch as the compiled FHOG); otherwise they keep their numpy code.
+and `kernels.USE_JIT` is on (core/kernels.py, the same switch as the compiled FHOG); otherwise they keep
+their numpy code.
 Each loop performs, element by element, the same float32 operations in the same order as the numpy code
 it replaces, so responses and feature maps are bit-identical (test/test_core_speed_kernels.py):
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
-from swir_tracker_ros.core.kcf import gaussian_label_spectrum, irfft2, linear_correlation, rfft2
+from swir_tracker_ros.core.fft import gaussian_label_spectrum, irfft2, linear_correlation, rfft2
 from swir_tracker_ros.core.scale import ScaleOptions
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f

@@ -4,23 +4,24 @@
 Three compiled loops (core/fhog_jit.py, numba, pinned in requirements.txt) do the gradients, the
 orientation binning with the bilinear scatter into cells, and the block normalisation (with the cosine
 window); `cv2.cartToPolar` gives magnitude and angle in between: ~5 passes over the pixels' data instead
-of ~25 numpy passes (docs/speed.md). Without numba the numpy path below is used: `cv2.Sobel` gradients,
+of ~25 numpy passes (docs/experiments.md). Without numba the numpy path below is used: `cv2.Sobel` gradients,
 ONE `np.add.at` that scatters every pixel into its 2 orientation bins x 2 x cells, a row pooling over
 `cell` row phases, and the block normalisation on the (small) cell grid. Both give the numbers of the
 replaced `np.bincount` code exactly (float64 cell sums in its order, every float32 operation in its
 order): that implementation is kept in test/fhog_reference.py and test/test_core_fhog.py pins
 bit-identical results on real frames for both paths. Every pixel-sized array is a reused per-shape
-buffer (fresh multi-MB arrays cost a page fault per 4 kB; docs/speed.md).
+buffer (fresh multi-MB arrays cost a page fault per 4 kB; docs/experiments.md).
 """
 
 from __future__ import annotations
 
-import importlib
 from functools import lru_cache
 from types import ModuleType
 
 import cv2
 import numpy as np
+
+from swir_tracker_ros.core import kernels
 
 N_ORIENT = 9  # contrast-insensitive orientations; 2 * N_ORIENT contrast-sensitive bins
 N_BINS = 2 * N_ORIENT
@@ -63,7 +64,8 @@ def _hist_plan(n: int, h: int, w: int, cell: int) -> tuple[np.ndarray, np.ndarra
 
 class _Workspace:
     """Per-shape buffers of `cell_histograms`, reused from frame to frame (a fresh multi-MB array costs
-    page faults on every call: measured 10 of 16 ms a call on the development machine, docs/speed.md)."""
+    page faults on every call: measured 10 of 16 ms a call on the development machine,
+    docs/experiments.md)."""
 
     def __init__(self, n: int, h: int, w: int, cell: int = 0, jit: bool = False) -> None:
         """Buffers for N patches of H x W pixels; with cell > 0 also the scatter buffers of the numpy
@@ -97,46 +99,13 @@ def _workspace(n: int, h: int, w: int, cell: int, jit: bool = False) -> _Workspa
     return _Workspace(n, h, w, cell, jit)
 
 
-USE_JIT = True
-"""Use the compiled loops (core/fhog_jit.py) when numba is importable; False forces the numpy path."""
-
-
-@lru_cache(maxsize=2)
-def _compiled_module(name: str) -> ModuleType | None:
-    """core/<name>.py (numba loops: fhog_jit, corr_jit), or None when numba is not installed (imported on
-    first use: numba's import costs ~0.6 s, its first compile ~2 s a loop, then loaded from its on-disk
-    cache)."""
-    try:
-        return importlib.import_module(f"swir_tracker_ros.core.{name}")
-    except ImportError:
-        return None
-
-
-def _jit() -> ModuleType | None:
-    return _compiled_module("fhog_jit") if USE_JIT else None
-
-
-def corr_jit() -> ModuleType | None:
-    """The compiled correlation loops (core/corr_jit.py) when in use (numba importable and `USE_JIT`)."""
-    return _compiled_module("corr_jit") if USE_JIT else None
-
-
 def warm_up() -> bool:
-    """Import numba and load (on a fresh install: compile, ~4 s) the compiled loops now rather than on the
-    first frame; ~1 s with numba's on-disk cache. For a node to call at start-up. True if they are in use."""
-    if _jit() is None:
+    """Import numba and load (on a fresh install: compile, ~4 s) the compiled FHOG and correlation loops now
+    rather than on the first frame; ~1 s with numba's on-disk cache. True if they are in use."""
+    if kernels.fhog_jit() is None:
         return False
     fhog(np.zeros((1, 8, 8), dtype=np.float32), 4, soft=True, window=np.ones((2, 2), dtype=np.float32))
-    cj = corr_jit()
-    if cj is not None:
-        spec = np.zeros((1, 1, 2, 2), np.complex64)
-        cj.cross_spectrum_kernel(spec, spec[0], np.empty((1, 2, 2), np.complex64))
-        one, win = np.zeros(1, dtype=np.intp), np.ones((2, 2), np.float32)
-        cj.cut_windows_kernel(win[None], win, one, one, np.empty((1, 1, 2, 2), np.float32))
-        for dtype in (np.uint8, np.uint16):  # the frame types the conditioner stretches
-            cj.stretch_kernel(np.zeros((2, 2), dtype), np.float32(0.0), np.float32(1.0), win)
-            ranks, values = np.zeros(4, np.intp), np.empty(4, np.int64)
-            cj.order_statistics_kernel(np.zeros((2, 2), dtype), 1, ranks, values)
+    kernels.warm_up_correlation()
     return True
 
 
@@ -162,7 +131,7 @@ def gradients(patches: np.ndarray, ws: _Workspace | None = None) -> tuple[np.nda
     n, h, w = patches.shape
     if ws is None:
         ws = _Workspace(n, h, w)
-    jit = _jit()
+    jit = kernels.fhog_jit()
     if jit is not None and h >= 2 and w >= 2:  # one compiled pass (OpenCV's per-row overhead dominates
         gx, gy = ws.gx, ws.gy  # on the tall, narrow stacks of many small patches)
         jit.gradients_kernel(np.ascontiguousarray(patches, dtype=np.float32), gx, gy)
@@ -242,14 +211,14 @@ def cell_histograms(patches: np.ndarray, cell: int, soft: bool = False) -> np.nd
 
     One scatter-add (`np.add.at`, 4 entries a pixel: 2 orientation bins x 2 x cells; 2 with hard bins)
     accumulates straight into a reused bin-innermost (N*H, wc, 18) float64 buffer, then `cell` vectorised
-    row passes do the y interpolation. Measured under OpenCV 4.14 (docs/speed.md): 18 per-bin planes
+    row passes do the y interpolation. Measured under OpenCV 4.14 (docs/experiments.md): 18 per-bin planes
     pooled by `cv2.sepFilter2D` take ~3x longer; the old `np.bincount` is as fast in a warm process but
     allocates its multi-MB output (page faults) on every call.
     """
     if patches.ndim == 2:
         patches = patches[None]
     patches = np.ascontiguousarray(patches, dtype=np.float32)
-    jit = _jit()
+    jit = kernels.fhog_jit()
     if jit is not None:
         return _jit_histograms(jit, patches, cell, soft).copy()  # the caller owns its result
     n, h, w = patches.shape
@@ -318,7 +287,7 @@ def fhog(
     if patches.ndim == 2:
         patches = patches[None]
     patches = np.ascontiguousarray(patches, dtype=np.float32)
-    jit = _jit()
+    jit = kernels.fhog_jit()
     if jit is not None:
         hist = _jit_histograms(jit, patches, cell, soft)
         n, hc, wc, _ = hist.shape

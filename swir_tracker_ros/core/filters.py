@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The base trackers, one class each, and the registry that `Tracker` selects one from (core_contract.md)."""
+"""The base trackers, one class each, and `make_filter`, which builds the one its Params belong to."""
 
 from __future__ import annotations
 
@@ -10,13 +10,12 @@ from typing import Any
 
 import numpy as np
 
-from swir_tracker_ros.core.bacf import BACF
+from swir_tracker_ros.core.bacf import BACF, BACFParams
 from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.confidence import psr
-from swir_tracker_ros.core.dcf_ca import DCFCA, context_offsets
+from swir_tracker_ros.core.dcf_ca import DCFCA, DCFCAParams, context_offsets
 from swir_tracker_ros.core.features import feature_shape
-from swir_tracker_ros.core.kcf import KCF
-from swir_tracker_ros.core.params import PIPELINES, TrackerParams
+from swir_tracker_ros.core.kcf import KCF, KCFParams
 from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman import DISSERTATION_DCFCA, PAPER000_KCF, BoxModel, dcfca_box_model, kcf_box_model
@@ -52,19 +51,18 @@ class KCFFilter(BaseFilter):
     def failed(self, det: Detection) -> bool:
         return det.psr < self.fp.psr_threshold
 
-    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
-        super().__init__(p, w, h)
+    def __init__(self, fp: KCFParams, w: float, h: float) -> None:
+        super().__init__(fp, w, h)
         self._sample: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None  # (maps, KCF.sample)
         self._peak_sum = self._apce_sum = 0.0
         self._n = 0
-        gate = self.fp.update_gate
-        self._gate = gate if gate != "auto" else ("lmcf" if p.variant == "measured" else "peak")
+        self._lmcf = fp.update_gate == "lmcf"
 
     def confident(self, det: Detection) -> bool:
         """Gate `peak`: peak > 0.5 (paper 000). Gate `lmcf` (Wang et al., CVPR 2017, eq. 12): peak >=
         beta1 x mean peak and APCE >= beta2 x mean APCE, the means over the frames that updated."""
         fp = self.fp
-        if self._gate == "peak":
+        if not self._lmcf:
             return det.peak > fp.update_peak_threshold
         ok = self._n == 0 or (
             det.peak >= fp.lmcf_peak_ratio * self._peak_sum / self._n
@@ -93,8 +91,8 @@ class DCFCAFilter(BaseFilter):
     robust_method = "A2"
     threshold_map = DISSERTATION_DCFCA
 
-    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
-        super().__init__(p, w, h)
+    def __init__(self, fp: DCFCAParams, w: float, h: float) -> None:
+        super().__init__(fp, w, h)
         self._apce_sum = self._apce_n = 0.0
         self._apce_est_sum = self._apce_est_n = 0.0
 
@@ -148,11 +146,11 @@ class BACFFilter(KCFFilter):
     name = "bacf"
     psr_reacquisition = False  # its flatter responses keep PSRs near 7 on the target
 
-    def __init__(self, p: TrackerParams, w: float, h: float) -> None:
+    def __init__(self, fp: BACFParams, w: float, h: float) -> None:
         self._size = (w, h)
-        self._square = p.bacf.window_shape == "square"
+        self._square = fp.window_shape == "square"
         self._psr_sum, self._psr_n = 0.0, 0  # PSR of the frames that updated the model (psr_ratio)
-        super().__init__(p, w, h)
+        super().__init__(fp, w, h)
 
     def _window(self, win: Box) -> Box:
         """The window the filter samples for the tracker's (proportional) window `win`."""
@@ -234,14 +232,17 @@ class BACFFilter(KCFFilter):
         return ok
 
 
-FILTERS: dict[str, type[BaseFilter]] = {cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter)}
-"""Registry: `TrackerParams.pipeline` -> base tracker class (the keys are `params.PIPELINES`)."""
+FILTERS: dict[type, type[BaseFilter]] = {
+    KCFParams: KCFFilter, DCFCAParams: DCFCAFilter, BACFParams: BACFFilter,
+}
+"""The base tracker class of each filter Params class (`TrackerParams.base`)."""
 
 
-def make_filter(p: TrackerParams, w: float, h: float) -> BaseFilter:
-    """The base tracker of `p.pipeline` for a first box of size w x h (ParameterError if unknown)."""
+def make_filter(fp: Any, w: float, h: float) -> BaseFilter:
+    """The base tracker whose Params `fp` is, for a first box of size w x h (ParameterError if none)."""
     try:
-        cls = FILTERS[p.pipeline]
+        cls = FILTERS[type(fp)]
     except KeyError:
-        raise ParameterError(f"parameter pipeline = {p.pipeline!r} is not one of {list(PIPELINES)}") from None
-    return cls(p, w, h)
+        known = ", ".join(c.__name__ for c in FILTERS)
+        raise ParameterError(f"no base filter takes {type(fp).__name__} (known: {known})") from None
+    return cls(fp, w, h)

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
-import scipy.fft as sfft
 
 from swir_tracker_ros.core.features import FEATURE_KINDS
-from swir_tracker_ros.core.fhog import corr_jit
+from swir_tracker_ros.core.fft import gaussian_label_spectrum, irfft2, rfft2
+from swir_tracker_ros.core.kernels import corr_jit
 from swir_tracker_ros.core.scale import ScaleOptions
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import param as _f
@@ -31,13 +30,12 @@ class KCFParams(ScaleOptions):
     interp_factor: float = _f(0.02, "model learning rate; 0.075 is the raw-gray value", 0.0, 1.0)
     output_sigma_factor: float = _f(0.1, "Gaussian label sigma = sqrt(w h) x factor / cell", 0.01, 1.0)
     feature: str = _f(
-        "auto",
+        "hog_gray",
         "filter features: 31-channel FHOG (cell 4) with soft orientation bins as in Piotr's fhog "
         "(hog_soft: paper 000), with hard nearest bins (hog), soft FHOG plus the cell-mean intensity "
-        "(hog_gray, ours: real-set SRE AUC 0.460 -> 0.535, docs/tracking_core.md) or plus an 8-bin "
-        "intensity histogram (hog_ih), or raw gray (cell 1); auto: hog_gray for the variant measured, "
-        "hog_soft for the papers' variants",
-        choices=("auto", *FEATURE_KINDS),
+        "(hog_gray, ours: real-set SRE AUC 0.460 -> 0.535, docs/experiments.md) or plus an 8-bin "
+        "intensity histogram (hog_ih), or raw gray (cell 1)",
+        choices=FEATURE_KINDS,
     )
     cell_size: int = _f(4, "FHOG cell size in pixels (gray features always use 1)", 1, 8)
     psr_threshold: float = _f(
@@ -47,11 +45,10 @@ class KCFParams(ScaleOptions):
         0.5, "update gate `peak`: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0
     )
     update_gate: str = _f(
-        "auto",
-        "confident-update gate: peak (paper 000: peak > update_peak_threshold), lmcf (Wang et al., "
-        "CVPR 2017, eq. 12: peak and APCE both above a ratio of their means over the updated frames) or "
-        "auto: lmcf for the variant measured (ours), peak for the papers' variants",
-        choices=("auto", "peak", "lmcf"),
+        "lmcf",
+        "confident-update gate: peak (paper 000: peak > update_peak_threshold) or lmcf (ours after Wang et "
+        "al., CVPR 2017, eq. 12: peak and APCE both above a ratio of their means over the updated frames)",
+        choices=("peak", "lmcf"),
     )
     lmcf_peak_ratio: float = _f(0.7, "gate lmcf: beta1, peak >= beta1 x mean peak (LMCF)", 0.0, 2.0)
     lmcf_apce_ratio: float = _f(0.45, "gate lmcf: beta2, APCE >= beta2 x mean APCE (LMCF)", 0.0, 2.0)
@@ -63,25 +60,6 @@ class KCFParams(ScaleOptions):
 
     def validate(self) -> None:
         validate_params(self, "kcf.")
-
-
-@lru_cache(maxsize=16)
-def gaussian_label_spectrum(rows: int, cols: int, sigma: float) -> np.ndarray:
-    """rfft2 of the Gaussian regression target, peak 1 shifted to (0, 0) (KCF `gaussian_shaped_labels`)."""
-    r = np.arange(rows) - rows // 2
-    c = np.arange(cols) - cols // 2
-    y = np.exp(-0.5 / sigma**2 * (r[:, None] ** 2 + c[None, :] ** 2))
-    y = np.roll(y, (-(rows // 2), -(cols // 2)), axis=(0, 1))
-    return sfft.rfft2(y).astype(np.complex64)
-
-
-def rfft2(x: np.ndarray) -> np.ndarray:
-    """Real 2-D FFT over the last two axes (unnormalised forward, as MATLAB fft2)."""
-    return sfft.rfft2(x, axes=(-2, -1), workers=1)
-
-
-def irfft2(xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    return sfft.irfft2(xf, s=shape, axes=(-2, -1), workers=1)
 
 
 def gaussian_correlation(
@@ -137,12 +115,6 @@ def _chunked_cross_spectrum(
         if keep:
             chunks.append(zf)
     return cross, chunks
-
-
-def linear_correlation(zf: np.ndarray, xf: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Spectrum of the linear kernel correlation, sum over channels of zf * conj(xf) / numel."""
-    numel = zf.shape[-3] * shape[0] * shape[1]
-    return np.einsum("...chw,chw->...hw", zf, np.conj(xf)) / numel
 
 
 class KCF:

@@ -84,8 +84,8 @@ class DSSTParams:
 
 @dataclass
 class ScaleOptions:
-    """Size estimation and template geometry of a base filter: the fields every filter's Params shares
-    (KCFParams, DCFCAParams inherit them, so they are declared once)."""
+    """Size estimation, template geometry and response analysis of a base filter: the fields every
+    filter's Params shares (KCFParams, DCFCAParams inherit them, so they are declared once)."""
 
     scale_estimator: str = _f(
         "search",
@@ -101,8 +101,21 @@ class ScaleOptions:
         "template cell counts: exact ((1 + padding) x target rounded to whole cells, the papers), or (ours, "
         "an option) smooth7 / smooth5: each moved to the nearest 7- / 5-smooth number, fast FFT sizes (the "
         "window in the image is unchanged, resampled a few per cent finer or coarser); not the default: "
-        "more false-tracking frames under SRE (docs/speed.md)",
+        "more false-tracking frames under SRE (docs/experiments.md)",
         choices=FFT_SIZES,
+    )
+    large_target_halving: float = _f(
+        100.0,
+        "model works at half resolution when sqrt(w h) >= this many pixels (KCF reference); 0 disables",
+        0.0,
+        10000.0,
+    )
+    psr_exclusion_px: int = _f(
+        10,
+        "side of the square around the peak excluded from the PSR sidelobe, in template pixels (paper 000: "
+        "10x10); ceil(px / cell) response cells",
+        1,
+        100,
     )
 
 

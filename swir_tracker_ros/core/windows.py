@@ -56,7 +56,7 @@ def nearest_smooth_count(n: int, largest_prime: int = 5) -> int:
 
     scipy.fft's pocketfft has dedicated radix-2/3/4/5 passes (and radix-7/11 passes for complex
     transforms); any other prime factor p goes through a generic O(p^2) pass, so e.g. a 62-cell axis
-    (2 x 31) costs ~1.7x a 64-cell one per cell, a prime 59 ~2.5x a 60 (docs/speed.md, FFT-friendly
+    (2 x 31) costs ~1.7x a 64-cell one per cell, a prime 59 ~2.5x a 60 (docs/experiments.md, FFT-friendly
     template sizes).
     """
     n = max(4, int(n))

@@ -9,9 +9,10 @@ import signal
 import sys
 from pathlib import Path
 
+from swir_tracker_ros.configs import CONFIGURATIONS, DEFAULT_CONFIGURATION
 from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.bagio import FrameRecord, bag_info, write_bag
-from swir_tracker_ros.harness.evaluate import VARIANTS, EvalResult, evaluate, format_table
+from swir_tracker_ros.harness.evaluate import EvalResult, evaluate, format_table
 from swir_tracker_ros.harness.metrics import SRE_STYLES
 from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, convert_bits, open_source
 
@@ -135,7 +136,8 @@ def _progress(a: argparse.Namespace):
 
 def cmd_eval(a: argparse.Namespace) -> int:
     srcs = _sources(a)
-    result = evaluate(srcs, a.tracker or list(VARIANTS), a.pipeline, _progress(a), overrides=a.set or ())
+    names = a.tracker or list(CONFIGURATIONS)
+    result = evaluate(srcs, names, a.pipeline, _progress(a), overrides=a.set or ())
     _finish(result, a)
     return 0
 
@@ -152,7 +154,7 @@ def cmd_compare(a: argparse.Namespace) -> int:
             reuse.merge(EvalResult.from_json(json.loads(Path(path).read_text())))
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise HarnessError(f"{path}: cannot reuse this result: {exc}") from None
-    variants = list(VARIANTS) if a.tracker is None else a.tracker
+    variants = list(CONFIGURATIONS) if a.tracker is None else a.tracker
     result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse, a.set or ())
     for name, per in result.sequences.items():  # reused OpenCV rows
         per.update({k: v for k, v in reuse.sequences.get(name, {}).items() if k.startswith("opencv_")})
@@ -171,8 +173,6 @@ def _compare_protocol(a: argparse.Namespace) -> int:
         format_protocol,
         run_protocol,
     )
-    from swir_tracker_ros.tracker import TrackerParams
-
     if a.plots or a.curves:
         raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
     reuse = None
@@ -186,7 +186,7 @@ def _compare_protocol(a: argparse.Namespace) -> int:
         else:
             for seq, per in old.stats.items():
                 reuse.stats.setdefault(seq, {}).update(per)
-    variants = [TrackerParams().variant] if a.tracker is None else a.tracker
+    variants = [DEFAULT_CONFIGURATION] if a.tracker is None else a.tracker
     peers = ["KCF", "CSRT"] if a.opencv is None else a.opencv
     cache = None if a.no_peer_cache else (a.peer_cache or os.environ.get("SWIR_PEER_CACHE")
                                           or DEFAULT_PEER_CACHE)
@@ -271,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     def eval_args(p: argparse.ArgumentParser) -> None:
         p.add_argument("bags", nargs="+", help="bags, sequence folders, a folder of them, or synth:NAME")
-        p.add_argument("--tracker", nargs="*", choices=VARIANTS, default=None,
+        p.add_argument("--tracker", nargs="*", choices=tuple(CONFIGURATIONS), default=None,
                        help="variants (default: all; `compare --tracker` alone: OpenCV only)")
         p.add_argument("--pipeline", default=None,
                        help="TrackerParams.pipeline (default: TrackerParams' own default)")

@@ -11,7 +11,6 @@ from dataclasses import dataclass, field, fields, is_dataclass, replace
 
 import numpy as np
 
-from swir_tracker_ros.core.params import VARIANTS  # noqa: F401  (re-exported: the one definition is in the core)
 from swir_tracker_ros.errors import HarnessError, SwirTrackerError
 from swir_tracker_ros.harness.metrics import Score, mean_scores, score, sre_box
 from swir_tracker_ros.harness.sources import Source
@@ -93,17 +92,16 @@ def _set_path(obj: object, path: list[str], value: object, full: str) -> object:
 
 
 def tracker_params(variant: str, pipeline: str | None = None, overrides: Sequence[str] = ()) -> object:
-    """`TrackerParams` of one variant: `pipeline` None keeps its default pipeline; `overrides` are
-    `NAME=VALUE` strings (dotted names reach nested parameter dataclasses, VALUE is parsed as YAML).
-    Validated; a bad name or value is a HarnessError."""
+    """`TrackerParams` of the named configuration `variant` (configs/): `pipeline` the base filter (None: the
+    configuration's own); `overrides` are `NAME=VALUE` strings (dotted names reach nested parameter
+    dataclasses, VALUE is parsed as YAML). Validated; a bad name or value is a HarnessError."""
     import yaml
 
+    from swir_tracker_ros.configs import configuration
     from swir_tracker_ros.errors import ParameterError
-    from swir_tracker_ros.tracker import TrackerParams
 
-    kw = {"variant": variant} if pipeline is None else {"variant": variant, "pipeline": pipeline}
     try:
-        params = TrackerParams(**kw)
+        params = configuration(variant, pipeline)
         for item in overrides:
             name, eq, text = item.partition("=")
             if not eq or not name:

@@ -9,7 +9,7 @@ Usage in the tracking core (copy this)::
 
     model = kcf_box_model()                        # or dcfca_box_model(box.w, box.h)
     kf = RobustKalmanFilter(model, influence=Huber(), robust_components=(0, 1), method="A2")
-    # variant "kalman": kf = KalmanFilter(model)  (same surface; threshold is ignored)
+    # configuration "kalman": kf = KalmanFilter(model)  (same surface; threshold is ignored)
     kf.initialize(model.state_from_box(box), model.P0)
 
     # every frame
@@ -24,7 +24,7 @@ Usage in the tracking core (copy this)::
     out_box = model.box_from_state(kf.x)
     info.weights, info.normalized, info.threshold, info.coasted   # diagnostics per component
 
-    # variant "robust_adaptive_r": adapt R from post-fit residuals of the position components
+    # configuration "robust_adaptive_r": adapt R from post-fit residuals of the position components
     noise = AdaptiveNoise(model.R, components=(0, 1))
     info = kf.update(z, threshold=k)
     if not info.coasted:

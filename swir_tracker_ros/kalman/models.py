@@ -16,8 +16,9 @@ from swir_tracker_ros.types import Box
 class BoxModel:
     """Constant-velocity box model: F, G, H, Q, R, a start covariance P0 and the box <-> state mapping.
 
-    ``kind`` is ``"kcf"`` (state [xc, yc, s, r, vx, vy, vs], s = w h, r = w/h) or ``"dcfca"``
-    (state [xc, yc, w, h, vxc, vyc, vw, vh]). The measurement is always H x: the first 4 state entries.
+    ``kind`` is ``"area_aspect"`` (paper 000's state [xc, yc, s, r, vx, vy, vs], s = w h, r = w/h) or
+    ``"width_height"`` (the dissertation's state [xc, yc, w, h, vxc, vyc, vw, vh]). The measurement is
+    always H x: the first 4 state entries.
     """
 
     kind: str
@@ -30,8 +31,8 @@ class BoxModel:
     names: tuple[str, ...]
 
     def measurement_from_box(self, box: Box) -> np.ndarray:
-        """The measurement vector z = H x of a box: [xc, yc, s, r] (kcf) or [xc, yc, w, h] (dcfca)."""
-        if self.kind == "kcf":
+        """The measurement vector z = H x of a box: [xc, yc, s, r] (area_aspect), else [xc, yc, w, h]."""
+        if self.kind == "area_aspect":
             r = box.w / box.h if box.h != 0 else math.nan
             return np.array([box.cx, box.cy, box.w * box.h, r])
         return np.array([box.cx, box.cy, box.w, box.h])
@@ -45,10 +46,10 @@ class BoxModel:
         return x
 
     def box_from_state(self, x: np.ndarray) -> Box:
-        """Box of a state; a non-positive size (area or aspect for kcf) gives w = h = 0 (not is_valid)."""
+        """Box of a state; a non-positive size (or area or aspect) gives w = h = 0 (not is_valid)."""
         x = np.asarray(x, dtype=float)
         cx, cy = float(x[0]), float(x[1])
-        if self.kind == "kcf":
+        if self.kind == "area_aspect":
             s, r = float(x[2]), float(x[3])
             w, h = (math.sqrt(s * r), math.sqrt(s / r)) if s > 0 and r > 0 else (0.0, 0.0)
         else:
@@ -76,7 +77,7 @@ def kcf_box_model(T: float = 1.0) -> BoxModel:
     Q = np.diag([1.0, 1.0, 1.0, 1.0, 0.1, 0.1, 0.01])
     R = np.diag([1.0, 1.0, 10.0, 10.0])
     P0 = np.diag([1.0, 1.0, 10.0, 10.0, 100.0, 100.0, 100.0])
-    return BoxModel("kcf", F, np.eye(7), H, Q, R, P0, ("xc", "yc", "s", "r", "vx", "vy", "vs"))
+    return BoxModel("area_aspect", F, np.eye(7), H, Q, R, P0, ("xc", "yc", "s", "r", "vx", "vy", "vs"))
 
 
 def dcfca_box_model(w: float, h: float, sigma_p: float = 0.05, sigma_v: float = 0.00625,
@@ -97,4 +98,4 @@ def dcfca_box_model(w: float, h: float, sigma_p: float = 0.05, sigma_v: float = 
     R = np.diag([pw, ph, pw, ph])
     P0 = np.diag([pw, ph, pw, ph, 100.0, 100.0, 100.0 * vw, 100.0 * vh])
     names = ("xc", "yc", "w", "h", "vxc", "vyc", "vw", "vh")
-    return BoxModel("dcfca", F, np.eye(8), H, Q, R, P0, names)
+    return BoxModel("width_height", F, np.eye(8), H, Q, R, P0, names)

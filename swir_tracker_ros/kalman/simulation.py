@@ -32,7 +32,7 @@ class Scenario:
     Q: float = 0.1
     R: float = 1.0
     sigma_o2: float = 1000.0
-    startup: str = "robust"  # "eq32": raw two-point start; "robust": repeated-median line, n_start samples
+    startup: str = "repeated_median"  # "eq32": raw two-point start; "repeated_median": line over n_start
     n_start: int = 15
     lost_threshold: float = 10.0  # a run is "lost" if its position RMSE after start-up exceeds this x sigma_n
 
@@ -96,12 +96,12 @@ def start_state(y: np.ndarray, sc: Scenario) -> tuple[int, np.ndarray, np.ndarra
     P0 = np.array([1.0, 1.0 / T, Q + 2.0 / T**2])  # p00, p01, p11
     if sc.startup == "eq32":
         return 2, np.stack([y[:, 1], (y[:, 1] - y[:, 0]) / T], axis=1), P0
-    if sc.startup == "robust":
+    if sc.startup == "repeated_median":
         k0 = sc.n_start
         t = np.arange(k0) * T
         b, a = repeated_median_line(t, y[:, :k0])
         return k0, np.stack([a + b * t[-1], b], axis=1), P0
-    raise KalmanError(f"unknown start-up {sc.startup!r}; choose 'eq32' or 'robust'")
+    raise KalmanError(f"unknown start-up {sc.startup!r}; choose 'eq32' or 'repeated_median'")
 
 
 def batch_filter(y: np.ndarray, x0: np.ndarray, P0: np.ndarray, sc: Scenario, method: str,

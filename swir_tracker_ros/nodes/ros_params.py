@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Declare a parameter dataclass as described, range-checked ROS parameters (docs/interfaces.md).
 
-Nested parameter dataclasses become dotted names (`tracker.kcf.padding`); validation is the ROS-free
-`paramfield.validate_params`.
+Nested parameter dataclasses become dotted names (`tracker.base.padding`); validation is the ROS-free
+`paramfield.validate_params`. A params class declares its defaults; an instance (a named configuration)
+declares its own values as the defaults, its nested Params keeping their classes.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from swir_tracker_ros.errors import ParameterError
-from swir_tracker_ros.paramfield import flat_fields, validate_params
+from swir_tracker_ros.paramfield import as_instance, flat_fields, leaf_type, rebuild, validate_params
 
 P = TypeVar("P")
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
@@ -51,14 +52,6 @@ def _base_type(annotation: Any) -> type:
     if annotation in _PTYPES:
         return annotation
     raise ParameterError(f"parameter field type {annotation!r} is not float, int, bool, str or list[float]")
-
-
-def _default(f: dataclasses.Field) -> Any:
-    if f.default is not dataclasses.MISSING:
-        return f.default
-    if f.default_factory is not dataclasses.MISSING:
-        return f.default_factory()
-    raise ParameterError(f"parameter field {f.name!r} has no default value")
 
 
 def _coerce(kind: type, name: str, value: Any) -> Any:
@@ -101,26 +94,13 @@ def describe(f: dataclasses.Field, kind: type, name: str) -> ParameterDescriptor
     return desc
 
 
-def _construct(cls: type[P], values: dict[str, Any]) -> P:
-    """cls from dotted leaf values (`kcf.padding`); a nested dataclass field is built from its own leaves."""
-    hints = typing.get_type_hints(cls)
-    kwargs: dict[str, Any] = {}
-    for f in dataclasses.fields(cls):  # type: ignore[arg-type]
-        if dataclasses.is_dataclass(hints[f.name]):
-            head = f.name + "."
-            sub = {k[len(head):]: v for k, v in values.items() if k.startswith(head)}
-            kwargs[f.name] = _construct(hints[f.name], sub)
-        elif f.name in values:
-            kwargs[f.name] = values[f.name]
-    return cls(**kwargs)
-
-
-def _build(cls: type[P], values: dict[str, Any], prefix: str) -> P:
-    """Instance of cls from (dotted) field values, validated by metadata and by its own `validate()`."""
+def _build(template: P, values: dict[str, Any], prefix: str) -> P:
+    """`template` with the (dotted) field values, validated by metadata and by its own `validate()`."""
+    name = prefix or type(template).__name__
     try:
-        params = _construct(cls, values)
+        params = rebuild(template, values)
     except (TypeError, ValueError) as exc:
-        raise ParameterError(f"parameters {prefix or cls.__name__} cannot be built: {exc}") from exc
+        raise ParameterError(f"parameters {name} cannot be built: {exc}") from exc
     validate_params(params, prefix)
     validate = getattr(params, "validate", None)
     if callable(validate):
@@ -129,7 +109,7 @@ def _build(cls: type[P], values: dict[str, Any], prefix: str) -> P:
         except ParameterError:
             raise
         except (TypeError, ValueError) as exc:
-            raise ParameterError(f"parameters {prefix or cls.__name__} are invalid: {exc}") from exc
+            raise ParameterError(f"parameters {name} are invalid: {exc}") from exc
     return params
 
 
@@ -148,16 +128,10 @@ def _widen_integer_overrides(node: Node, name: str, kind: type) -> None:
         overrides[name] = Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in param.value])
 
 
-def _leaf_type(cls: type, dotted: str) -> Any:
-    """Annotated type of the leaf field `a.b.c` of cls (through nested dataclasses)."""
-    head, _, rest = dotted.partition(".")
-    kind = typing.get_type_hints(cls)[head]
-    return _leaf_type(kind, rest) if rest else kind
-
-
-def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
+def bind_parameters(node: Node, cls: type[P] | P, *, prefix: str = "",
                     on_change: Callable[[P], None] | None = None) -> P:
-    """Declare every field of the dataclass `cls` as `<prefix><field>`, read and validate the values.
+    """Declare every field of the params `cls` (a class: its defaults; an instance: its values) as
+    `<prefix><field>`, read and validate the values.
 
     Overrides from `--params-file` / `--ros-args -p` apply at declaration. A wrong type, a value out of
     range or a failing `validate()` raises `ParameterError` naming the parameter and the value. After
@@ -166,15 +140,17 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
     """
     if not dataclasses.is_dataclass(cls):
         raise ParameterError(f"{cls!r} is not a parameter dataclass")
-    # every leaf parameter, nested dataclasses flattened to dotted names (`tracker.kcf.padding`)
-    leaves = flat_fields(cls)
+    template = as_instance(cls)
+    # every leaf parameter, nested dataclasses flattened to dotted names (`tracker.base.padding`)
+    leaves = flat_fields(template)
     fields = {prefix + dotted: f for dotted, f, _ in leaves}
     local = {prefix + dotted: dotted for dotted, _, _ in leaves}
-    kinds = {prefix + dotted: _base_type(_leaf_type(cls, dotted)) for dotted, _, _ in leaves}
+    defaults = {prefix + dotted: value for dotted, _, value in leaves}
+    kinds = {prefix + dotted: _base_type(leaf_type(template, dotted)) for dotted, _, _ in leaves}
     values: dict[str, Any] = {}
     for name, f in fields.items():
         kind = kinds[name]
-        default = _coerce(kind, name, _default(f))
+        default = _coerce(kind, name, defaults[name])
         desc = describe(f, kind, name)
         _widen_integer_overrides(node, name, kind)
         try:
@@ -190,7 +166,7 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
         except (InvalidParameterTypeException, InvalidParameterValueException, ParameterException) as exc:
             raise ParameterError(f"parameter {name} is invalid: {exc}") from exc
         values[local[name]] = _coerce(kind, name, declared)
-    current = _build(cls, values, prefix)
+    current = _build(template, values, prefix)
 
     def current_values() -> dict[str, Any]:
         return {local[n]: _coerce(kinds[n], n, node.get_parameter(n).value) for n in fields}
@@ -203,14 +179,14 @@ def bind_parameters(node: Node, cls: type[P], *, prefix: str = "",
             candidate = current_values()
             for p in mine:
                 candidate[local[p.name]] = _coerce(kinds[p.name], p.name, p.value)
-            _build(cls, candidate, prefix)
+            _build(template, candidate, prefix)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
     def post_set(params: list[Parameter]) -> None:
         if on_change is not None and any(p.name in fields for p in params):
-            on_change(_build(cls, current_values(), prefix))
+            on_change(_build(template, current_values(), prefix))
 
     node.add_on_set_parameters_callback(on_set)
     node.add_post_set_parameters_callback(post_set)

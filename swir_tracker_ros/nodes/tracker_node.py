@@ -27,7 +27,7 @@ from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
-from swir_tracker_ros.core import fhog
+from swir_tracker_ros.configs import ConfigurationChoice
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
 from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
@@ -56,11 +56,13 @@ class TrackerNode(Node):
         super().__init__(NODE_NAME, **node_kwargs)
         self.params = bind_parameters(self, TrackerNodeParams, on_change=self._on_node_params)
         check_topic_names(self.params)
-        self.tracker_params = bind_parameters(self, TrackerParams, prefix=TRACKER_PREFIX,
+        # the named configuration first; its own parameters are declared with its values as defaults
+        self.choice = bind_parameters(self, ConfigurationChoice, prefix=TRACKER_PREFIX)
+        self.tracker_params = bind_parameters(self, self.choice.build(), prefix=TRACKER_PREFIX,
                                               on_change=self._on_tracker_params)
         self.tracker = Tracker(self.tracker_params)
         with signals_deferred():  # a Ctrl-C inside numba's ctypes callbacks would be swallowed there
-            fhog.warm_up()  # the compiled FHOG loops load now (~1 s), not on the first tracked frame
+            Tracker.warm_up()  # the compiled loops load now (~1 s), not on the first tracked frame
         self.stats = FrameStats()
         self.poses = HeadPoseHistory()
         self.camera_intr: Intrinsics | None = None
@@ -90,8 +92,9 @@ class TrackerNode(Node):
         self.create_subscription(RegionOfInterest, topics.TRACK_INIT, guard(self._on_init), output)
         self.create_service(Trigger, topics.TRACK_CANCEL, self._on_cancel)
         self.diag_timer = self.create_timer(p.diagnostics_period_s, self._guard(self._publish_diagnostics))
-        self.get_logger().info(f"tracking {p.image_topic} with {self.tracker_params.pipeline}/"
-                               f"{self.tracker_params.variant}; init box: {p.init_box or 'none'}")
+        base = type(self.tracker_params.base).__name__
+        self.get_logger().info(f"tracking {p.image_topic} with configuration {self.choice.configuration} "
+                               f"({base}); init box: {p.init_box or 'none'}")
 
     # ------------------------------------------------------------------ callbacks
     def _guard(self, fn):
@@ -357,7 +360,8 @@ def usage() -> str:
     lines = ["usage: tracker [--help | --params-yaml]",
              "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
              "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
-    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
+    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, ConfigurationChoice),
+                        (TRACKER_PREFIX, TrackerParams)):
         lines += usage_lines(cls, prefix)
     return "\n".join(lines)
 
@@ -365,7 +369,8 @@ def usage() -> str:
 PARAMS_FILE = ParamsFile(
     "params/tracker.yaml", "/**",
     (("", TrackerNodeParams, ""),
-     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
+     ("tracker", (ConfigurationChoice, TrackerParams),
+      "the core: a named configuration (swir_tracker_ros/configs/) and its TrackerParams")),
     "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
     + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
     "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "

@@ -51,7 +51,7 @@ Scenarios (``scenarios.py``)
     ``frame(k) -> SceneFrame(index, t, image, truths, target, view)`` (``target`` None when out of view,
     ``occluded`` = the per-frame occlusion flag); iterating a run yields every frame.
     ``crowd_world(seed, n=12, thermal=True, ...)``: ids 1..n pedestrians wandering over a wide area;
-    ``demo_world(seed)``: the closed-loop demo world.
+    ``demo_world(seed, variant="demo")`` (``demo_world.py``): the closed-loop demo world and its family.
 
 Crowd scenes (``crowd.py``, imported on its own: ``from swir_tracker_ros.scene import crowd``)
     The acquisition tests' and benchmarks' thermal crowds, staged in image columns with these actors,
@@ -72,13 +72,13 @@ from swir_tracker_ros.scene.actors import (
     wall,
 )
 from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_world import demo_world
 from swir_tracker_ros.scene.scenarios import (
     TARGET_ID,
     ScenarioRun,
     ScenarioSpec,
     SceneFrame,
     crowd_world,
-    demo_world,
     make_scenario,
     scenarios,
 )

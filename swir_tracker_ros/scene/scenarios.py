@@ -12,6 +12,7 @@ import numpy as np
 from swir_tracker_ros.errors import SceneError
 from swir_tracker_ros.scene.actors import Leg, Path, Pedestrian, Vehicle, bush, pole, tree, wall
 from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.demo_world import demo_world
 from swir_tracker_ros.scene.sensor import SensorModel
 from swir_tracker_ros.scene.texture import Look, make_panorama
 from swir_tracker_ros.scene.world import Truth, World
@@ -199,8 +200,6 @@ def _low_contrast(seed: int) -> World:
 def _lookalike(seed: int) -> World:
     # The demo_crossing world (its first 8 s): a pedestrian of the target's look and size, 3 m nearer,
     # strolls the other way and passes in front of it at ~5 s, covering up to 70 % of it for ~0.4 s.
-    from swir_tracker_ros.scene.demo_scene import demo_world  # demo_scene builds on this module
-
     return demo_world(seed, variant="demo_crossing")
 
 
@@ -268,8 +267,3 @@ def crowd_world(seed: int, n: int = 12, thermal: bool = True, area: tuple[float,
         objs.append({"pole": pole, "tree": tree, "bush": bush, "wall": wall}[str(kind)](x, y))
     pano = make_panorama(seed, brightness=0.25 if thermal else 0.42, contrast=0.5 if thermal else 1.0)
     return World(pano, objs, SensorModel(bits=16 if thermal else 12), seed=seed)
-
-
-def demo_world(seed: int = 0) -> World:
-    """The closed-loop demo world: the t5 target walking 20 m across the park, plus clutter and occluders."""
-    return _row5(seed)

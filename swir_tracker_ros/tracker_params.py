@@ -1,0 +1,107 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`TrackerParams`: the tracker's parameters, one Params dataclass per layer and policy it composes.
+
+The defaults are our default configuration (`measured`, swir_tracker_ros/configs/measured.py); the papers'
+configurations (configs/) build theirs in plain code from these, leaving our policies out (None) or setting
+the papers' values. ROS names: `tracker.<field>.<subfield>` (`tracker.base.padding`, `tracker.memory.ratio`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from swir_tracker_ros.core.bacf import BACFParams
+from swir_tracker_ros.core.conditioning import ConditioningConfig
+from swir_tracker_ros.core.dcf_ca import DCFCAParams
+from swir_tracker_ros.core.kcf import KCFParams
+from swir_tracker_ros.paramfield import param, validate_params
+from swir_tracker_ros.policies.coast import CoastParams
+from swir_tracker_ros.policies.lookalike import LookalikeParams
+from swir_tracker_ros.policies.memory import MemoryParams
+from swir_tracker_ros.policies.motion import MotionParams
+from swir_tracker_ros.policies.occlusion import OcclusionParams
+from swir_tracker_ros.policies.redetection import RedetectionParams
+from swir_tracker_ros.policies.rejected import RejectedParams
+from swir_tracker_ros.policies.scale_search import ScaleSearchParams
+from swir_tracker_ros.policies.sweep import SweepParams
+from swir_tracker_ros.policies.update_gate import UpdateGateParams
+
+FilterParams = KCFParams | DCFCAParams | BACFParams
+"""The Params of a base filter; its type selects the filter (core/filters.py `make_filter`)."""
+
+
+@dataclass
+class TrackerParams:
+    """Every knob of `Tracker`, grouped by the layer or policy that reads it. A policy set to None is not
+    part of the tracker (the papers' configurations)."""
+
+    base: FilterParams = field(
+        default_factory=KCFParams,
+        metadata={"doc": "the base correlation filter: core/kcf.py KCFParams (paper 000 KCF), "
+                        "core/dcf_ca.py (the dissertation's DCF-CA), core/bacf.py (BACF)"},
+    )
+    scale: ScaleSearchParams = field(
+        default_factory=ScaleSearchParams,
+        metadata={"doc": "size search at the prediction (policies/scale_search.py)"},
+    )
+    motion: MotionParams | None = field(
+        default_factory=MotionParams,
+        metadata={"doc": "the box's Kalman filter (policies/motion.py); none: the bare correlation filter"},
+    )
+    occlusion: OcclusionParams = field(
+        default_factory=OcclusionParams,
+        metadata={"doc": "occlusion verdict and re-acquisition bars (policies/occlusion.py)"},
+    )
+    redetection: RedetectionParams = field(
+        default_factory=RedetectionParams,
+        metadata={"doc": "re-detection search around the prediction (policies/redetection.py)"},
+    )
+    memory: MemoryParams | None = field(
+        default_factory=MemoryParams,
+        metadata={"doc": "long-term appearance memory verifying the tracked frames (policies/memory.py)"},
+    )
+    lookalike: LookalikeParams | None = field(
+        default_factory=LookalikeParams,
+        metadata={"doc": "look-alike guard of the tracked frames (policies/lookalike.py)"},
+    )
+    sweep: SweepParams | None = field(
+        default_factory=SweepParams,
+        metadata={"doc": "long-loss sweep over the whole image (policies/sweep.py)"},
+    )
+    coast: CoastParams = field(
+        default_factory=CoastParams,
+        metadata={"doc": "motion of the prediction while not measured (policies/coast.py)"},
+    )
+    rejected: RejectedParams | None = field(
+        default_factory=RejectedParams,
+        metadata={"doc": "update and size of a rejected frame (policies/rejected.py)"},
+    )
+    update: UpdateGateParams = field(
+        default_factory=UpdateGateParams,
+        metadata={"doc": "model update gate (policies/update_gate.py)"},
+    )
+    conditioning: ConditioningConfig = field(
+        default_factory=ConditioningConfig,
+        metadata={"doc": "frame conditioning before any window is sampled (core/conditioning.py)"},
+    )
+    trail_frames: int = param(
+        50,
+        "(ours) frames of tracked history (centres with ego shifts removed, sizes) kept for the coast "
+        "model's mean velocity, the look-alike guard's motion reference and a rejected frame's size",
+        0,
+        100000,
+    )
+    presmooth: float = param(
+        0.02,
+        "(ours) Gaussian blur of the conditioned frame before any window is sampled, sigma = this x "
+        "sqrt(w h) of the start box (0.02: 0.8-1.3 px for 25x72-40x100 px targets): windows sampled at "
+        "sub-pixel positions are smoothed unequally by the bilinear interpolation, so two start boxes a "
+        "pixel apart learn differently smoothed templates (docs/experiments.md, thirteenth pass); 0: off "
+        "(the papers)",
+        0.0,
+        0.2,
+    )
+
+    def validate(self) -> None:
+        """Raise ParameterError naming the first parameter of the wrong type or out of range."""
+        validate_params(self)
