@@ -30,6 +30,12 @@ def param(default: Any, doc: str, lo: float | None = None, hi: float | None = No
     return field(default=default, metadata=meta)
 
 
+def nested(factory: Any, doc: str) -> Any:
+    """A dataclass field holding a nested parameter dataclass (a layer's or a policy's Params), built by
+    `factory` per instance, with `metadata={"doc": doc}`."""
+    return field(default_factory=factory, metadata={"doc": doc})
+
+
 _SCALAR_TYPES: dict[Any, tuple[type, ...]] = {str: (str,), int: (int,), float: (int, float), bool: (bool,)}
 
 

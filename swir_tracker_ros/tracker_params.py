@@ -8,13 +8,13 @@ the papers' values. ROS names: `tracker.<field>.<subfield>` (`tracker.base.paddi
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from swir_tracker_ros.core.bacf import BACFParams
 from swir_tracker_ros.core.conditioning import ConditioningConfig
 from swir_tracker_ros.core.dcf_ca import DCFCAParams
 from swir_tracker_ros.core.kcf import KCFParams
-from swir_tracker_ros.paramfield import param, validate_params
+from swir_tracker_ros.paramfield import nested, param, validate_params
 from swir_tracker_ros.policies.coast import CoastParams
 from swir_tracker_ros.policies.lookalike import LookalikeParams
 from swir_tracker_ros.policies.memory import MemoryParams
@@ -35,55 +35,30 @@ class TrackerParams:
     """Every knob of `Tracker`, grouped by the layer or policy that reads it. A policy set to None is not
     part of the tracker (the papers' configurations)."""
 
-    base: FilterParams = field(
-        default_factory=KCFParams,
-        metadata={"doc": "the base correlation filter: core/kcf.py KCFParams (paper 000 KCF), "
-                        "core/dcf_ca.py (the dissertation's DCF-CA), core/bacf.py (BACF)"},
-    )
-    scale: ScaleSearchParams = field(
-        default_factory=ScaleSearchParams,
-        metadata={"doc": "size search at the prediction (policies/scale_search.py)"},
-    )
-    motion: MotionParams | None = field(
-        default_factory=MotionParams,
-        metadata={"doc": "the box's Kalman filter (policies/motion.py); none: the bare correlation filter"},
-    )
-    occlusion: OcclusionParams = field(
-        default_factory=OcclusionParams,
-        metadata={"doc": "occlusion verdict and re-acquisition bars (policies/occlusion.py)"},
-    )
-    redetection: RedetectionParams = field(
-        default_factory=RedetectionParams,
-        metadata={"doc": "re-detection search around the prediction (policies/redetection.py)"},
-    )
-    memory: MemoryParams | None = field(
-        default_factory=MemoryParams,
-        metadata={"doc": "long-term appearance memory verifying the tracked frames (policies/memory.py)"},
-    )
-    lookalike: LookalikeParams | None = field(
-        default_factory=LookalikeParams,
-        metadata={"doc": "look-alike guard of the tracked frames (policies/lookalike.py)"},
-    )
-    sweep: SweepParams | None = field(
-        default_factory=SweepParams,
-        metadata={"doc": "long-loss sweep over the whole image (policies/sweep.py)"},
-    )
-    coast: CoastParams = field(
-        default_factory=CoastParams,
-        metadata={"doc": "motion of the prediction while not measured (policies/coast.py)"},
-    )
-    rejected: RejectedParams | None = field(
-        default_factory=RejectedParams,
-        metadata={"doc": "update and size of a rejected frame (policies/rejected.py)"},
-    )
-    update: UpdateGateParams = field(
-        default_factory=UpdateGateParams,
-        metadata={"doc": "model update gate (policies/update_gate.py)"},
-    )
-    conditioning: ConditioningConfig = field(
-        default_factory=ConditioningConfig,
-        metadata={"doc": "frame conditioning before any window is sampled (core/conditioning.py)"},
-    )
+    base: FilterParams = nested(
+        KCFParams, "the base correlation filter: core/kcf.py KCFParams (paper 000 KCF), core/dcf_ca.py "
+        "(the dissertation's DCF-CA), core/bacf.py (BACF)")
+    scale: ScaleSearchParams = nested(
+        ScaleSearchParams, "size search at the prediction (policies/scale_search.py)")
+    motion: MotionParams | None = nested(
+        MotionParams, "the box's Kalman filter (policies/motion.py); none: the bare correlation filter")
+    occlusion: OcclusionParams = nested(
+        OcclusionParams, "occlusion verdict and re-acquisition bars (policies/occlusion.py)")
+    redetection: RedetectionParams = nested(
+        RedetectionParams, "re-detection search around the prediction (policies/redetection.py)")
+    memory: MemoryParams | None = nested(
+        MemoryParams, "long-term appearance memory verifying the tracked frames (policies/memory.py)")
+    lookalike: LookalikeParams | None = nested(
+        LookalikeParams, "look-alike guard of the tracked frames (policies/lookalike.py)")
+    sweep: SweepParams | None = nested(
+        SweepParams, "long-loss sweep over the whole image (policies/sweep.py)")
+    coast: CoastParams = nested(
+        CoastParams, "motion of the prediction while not measured (policies/coast.py)")
+    rejected: RejectedParams | None = nested(
+        RejectedParams, "update and size of a rejected frame (policies/rejected.py)")
+    update: UpdateGateParams = nested(UpdateGateParams, "model update gate (policies/update_gate.py)")
+    conditioning: ConditioningConfig = nested(
+        ConditioningConfig, "frame conditioning before any window is sampled (core/conditioning.py)")
     trail_frames: int = param(
         50,
         "(ours) frames of tracked history (centres with ego shifts removed, sizes) kept for the coast "
