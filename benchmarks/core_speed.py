@@ -178,7 +178,7 @@ class StageTimer:
 
 
 # (module, attribute or Class.method, stage, phase?) - looked up by name and skipped when absent, so the
-# profile survives refactors of tracker.py / core/base.py; functions imported by name into other modules
+# profile survives refactors of the core; functions imported by name into other modules
 # are replaced there too (every loaded swir_tracker_ros module is searched for the same object).
 STAGES = (
     ("swir_tracker_ros.core.conditioning", "FrameConditioner.__call__", "conditioning", False),
@@ -187,10 +187,10 @@ STAGES = (
     ("swir_tracker_ros.core.features", "unwindowed_features", "features", False),
     ("swir_tracker_ros.core.features", "extract_features", "features", False),
     ("swir_tracker_ros.core.fhog", "fhog", "features", False),
-    ("swir_tracker_ros.core.kcf", "rfft2", "fft/correlation", False),
-    ("swir_tracker_ros.core.kcf", "irfft2", "fft/correlation", False),
+    ("swir_tracker_ros.core.fft", "rfft2", "fft/correlation", False),
+    ("swir_tracker_ros.core.fft", "irfft2", "fft/correlation", False),
     ("swir_tracker_ros.core.kcf", "gaussian_correlation", "fft/correlation", False),
-    ("swir_tracker_ros.core.kcf", "linear_correlation", "fft/correlation", False),
+    ("swir_tracker_ros.core.fft", "linear_correlation", "fft/correlation", False),
     ("swir_tracker_ros.core.kcf", "KCF.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.dcf_ca", "DCFCA.respond", "fft/correlation", False),
     ("swir_tracker_ros.core.confidence", "analyse", "peak/PSR analysis", False),
@@ -199,8 +199,8 @@ STAGES = (
     ("swir_tracker_ros.core.scale", "ScaleFilter.response", "dsst scale filter", False),
     ("swir_tracker_ros.core.scale", "ScaleFilter.train", "dsst scale filter", False),
     ("swir_tracker_ros.core.base", "BaseFilter.detect", "scale search", True),
-    ("swir_tracker_ros.core.base", "BaseFilter.detect_grid", "grid", True),
-    ("swir_tracker_ros.core.base", "BaseFilter.detect_lattice", "grid", True),
+    ("swir_tracker_ros.core.multiwindow", "MultiWindow.detect_grid", "grid", True),
+    ("swir_tracker_ros.core.multiwindow", "MultiWindow.detect_lattice", "grid", True),
     ("swir_tracker_ros.core.base", "BaseFilter.train_memory", "model update", True),
     ("swir_tracker_ros.core.filters", "KCFFilter.train", "model update", True),
     ("swir_tracker_ros.core.filters", "DCFCAFilter.train", "model update", True),
@@ -338,7 +338,7 @@ def primitives(with_dnn: bool = True) -> dict[str, float]:
 
 def fft_libraries() -> dict[str, float]:
     """Microseconds of one forward + inverse real 2-D FFT of a (5, 31, 62, 25) FHOG batch (40x100 target,
-    5 scales) with scipy.fft, numpy.fft and cv2.dft (per plane), the choice behind kcf.rfft2 / irfft2."""
+    5 scales) with scipy.fft, numpy.fft and cv2.dft (per plane), the choice behind core.fft.rfft2 / irfft2."""
     import cv2
     import scipy.fft as sfft
 
@@ -385,7 +385,7 @@ def fft_libraries() -> dict[str, float]:
         "numpy.fft rfft2+irfft2 (float64)": best_of(numpy_),
         "cv2.dft per plane fwd+inv": best_of(cv2_),
         "cv2.dft DFT_ROWS batched, fwd + col inv only": best_of(cv2_rows),
-        "core.kcf rfft2+irfft2 (chosen)": best_of(ours),
+        "core.fft rfft2+irfft2 (chosen)": best_of(ours),
         "core.kcf at 63 x 25 cells (fft_sizes: smooth7)": best_of(ours_at(63)),
         "core.kcf at 64 x 25 cells (fft_sizes: smooth5)": best_of(ours_at(64)),
     }

@@ -303,6 +303,10 @@ def test_tracker_node_passes_elapsed_frames_once_the_core_takes_them(monkeypatch
         def __init__(self, _params=None) -> None:
             pass
 
+        @staticmethod
+        def warm_up() -> bool:
+            return False
+
         def init(self, *_a, **_k) -> None:
             pass
 

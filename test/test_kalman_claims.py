@@ -67,7 +67,7 @@ def test_start_states() -> None:
     y = np.array([[1000.0, 1001.0, 1002.0]])
     k0, x0, P0 = start_state(y, sc)
     assert k0 == 2 and x0.tolist() == [[1001.0, 50.0]] and P0.tolist() == pytest.approx([1.0, 50.0, 5000.1])
-    sc = replace(PAPER001_RADAR, startup="robust", n_start=15)
+    sc = replace(PAPER001_RADAR, startup="repeated_median", n_start=15)
     t = np.arange(15) * sc.T
     y = (1000.0 + 50.0 * t + 0.1 * np.sin(7 * t))[None, :].copy()
     y[0, [2, 5, 13, 14]] += [300.0, -250.0, 400.0, 280.0]

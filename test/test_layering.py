@@ -13,7 +13,7 @@ from conftest import REPO
 
 PKG = REPO / "swir_tracker_ros"
 BASE = {"types", "errors", "topics", "paramfield"}
-PRODUCT = {"kalman", "core", "tracker", "acquisition", "pelco"}
+PRODUCT = {"kalman", "core", "policies", "tracker_params", "configs", "tracker", "acquisition", "pelco"}
 # Each layer and the layers it may import (docs/interfaces.md). Base modules import nothing above them.
 ALLOWED: dict[str, set[str]] = {
     "types": set(),
@@ -22,7 +22,10 @@ ALLOWED: dict[str, set[str]] = {
     "paramfield": {"errors"},
     "kalman": BASE,
     "core": BASE | {"kalman"},
-    "tracker": BASE | {"kalman", "core"},
+    "policies": BASE | {"kalman", "core"},  # the long-term mechanisms around a base filter
+    "tracker_params": BASE | {"core", "policies"},
+    "configs": BASE | {"core", "policies", "tracker_params"},  # named configurations
+    "tracker": BASE | {"kalman", "core", "policies", "tracker_params", "configs"},
     "acquisition": BASE | {"kalman"},
     "pelco": BASE,
     "scene": BASE | {"acquisition"},  # scene.crowd hands out acquisition Detections (simulation -> core)
@@ -31,7 +34,7 @@ ALLOWED: dict[str, set[str]] = {
     # the simulated camera and head; nodes: the node toolkit (runner, parameters); pelco: the simulated head
     # speaks the protocol of pelco/
     "simulation": BASE | {"scene", "msg_adapters", "nodes", "pelco"},
-    "harness": BASE | {"kalman", "core", "tracker", "scene", "msg_adapters"},
+    "harness": BASE | {"kalman", "core", "tracker", "tracker_params", "configs", "scene", "msg_adapters"},
     "demo": BASE | {"scene", "simulation", "nodes", "msg_adapters", "harness"},
 }
 # The params-file generator (`python -m swir_tracker_ros.param_files`) reads every layer's params; no
