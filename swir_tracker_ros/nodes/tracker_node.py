@@ -372,7 +372,8 @@ class TrackerNode(Node):
                   **input_publishers(self, (self.image_input, self.params.camera_info_topic,
                                             self.params.joint_states_topic))}
         header = Header(stamp=self.get_clock().now().to_msg())
-        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values, NODE_NAME)]))
+        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values,
+                                                               self.get_fully_qualified_name())]))
 
 
 def _scale_box(box: Box, sx: float, sy: float) -> Box:
