@@ -48,7 +48,7 @@ ENDPOINTS: tuple[Endpoint, ...] = (
     Endpoint(topics.JOINT_STATES, "sensor_msgs/msg/JointState", "in", "best effort, 10",
              "joints `pan`, `tilt` (rad) for ego-motion compensation", "joint_states_topic"),
     Endpoint(topics.TRACK_INIT, "sensor_msgs/msg/RegionOfInterest", "in", "reliable, 10",
-             "select the target: `x_offset, y_offset, width, height` in full-resolution pixels; starts on "
+             "select the target: its box in full-resolution pixels (x, y offset, width, height); starts on "
              "the next frame, no answer"),
     *(Endpoint(topics.mouse_left_topic(image), CLICK_TYPES[kind], "in", "reliable, 10", _CLICK,
                "image_topic" if image == topics.IMAGE else "", (("click_msg", kind),))

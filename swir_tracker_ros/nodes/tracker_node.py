@@ -28,26 +28,29 @@ from swir_tracker_ros import topics
 from swir_tracker_ros.core import fhog
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
-from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
-from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node, signals_deferred, user_arguments
 from swir_tracker_ros.nodes.selection import CatchUp, Code, StoredFrame, Verdict
 from swir_tracker_ros.nodes.tracker_node_params import (
     FORMAT_CHANGE_FRAMES,
+    PARAMS_FILE,
+    TRACKER_PREFIX,
     FrameStats,
     HeadPoseHistory,
     TrackerNodeParams,
     frame_problem,
+    params_yaml,
+    usage,
 )
 from swir_tracker_ros.nodes.tracker_outputs import ACTIVE, IDLE_RESULT, TrackOutputs
 from swir_tracker_ros.nodes.tracker_selection import MIB, Selector
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
+__all__ = ["DIAG_NAME", "NODE_NAME", "PARAMS_FILE", "TrackerNode", "main", "params_yaml", "usage"]
+
 NODE_NAME = "tracker"
 DIAG_NAME = "swir_tracker/tracker_node"
-TRACKER_PREFIX = "tracker."
 
 
 class TrackerNode(Node):
@@ -387,31 +390,6 @@ def _fmt_key(key: tuple) -> str:
 
 def _fmt_box(box: Box) -> str:
     return "(" + ", ".join(f"{v:.1f}" for v in box.as_tuple()) + ")"
-
-
-def usage() -> str:
-    """`tracker --help`: how to start the node and every parameter with its default."""
-    lines = ["usage: tracker [--help | --params-yaml]",
-             "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
-             "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
-    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
-        lines += usage_lines(cls, prefix)
-    return "\n".join(lines)
-
-
-PARAMS_FILE = ParamsFile(
-    "params/tracker.yaml", "/**",
-    (("", TrackerNodeParams, ""),
-     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
-    "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
-    + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
-    "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "
-    "Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml")
-
-
-def params_yaml() -> str:
-    """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
-    return render_params_file(PARAMS_FILE)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Tracker-node parameters and its small bookkeeping helpers (frame statistics, head-pose history)."""
+"""Tracker-node parameters (with `--help` and `--params-yaml`) and its small bookkeeping helpers (frame
+statistics, head-pose history)."""
 
 from __future__ import annotations
 
@@ -12,8 +13,12 @@ import numpy as np
 
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
+from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.paramfield import param, validate_params
+from swir_tracker_ros.tracker import TrackerParams
 
+TRACKER_PREFIX = "tracker."
 CLICK_MSGS = ("point", "point_stamped", "off")
 
 
@@ -207,3 +212,28 @@ class FrameStats:
         self.errors = 0
         self.latency_ms, self.core_ms, self.age_ms, self.overhead_ms = [], [], [], []
         return values, trouble
+
+
+def usage() -> str:
+    """`tracker --help`: how to start the node and every parameter with its default."""
+    lines = ["usage: tracker [--help | --params-yaml]",
+             "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
+             "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
+    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
+        lines += usage_lines(cls, prefix)
+    return "\n".join(lines)
+
+
+PARAMS_FILE = ParamsFile(
+    "params/tracker.yaml", "/**",
+    (("", TrackerNodeParams, ""),
+     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
+    "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
+    + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
+    "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "
+    "Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml")
+
+
+def params_yaml() -> str:
+    """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
+    return render_params_file(PARAMS_FILE)
