@@ -196,9 +196,12 @@ def test_bringup_against_pelco_sim_with_a_bag_as_the_camera(processes: ProcessSe
     assert camera.errors and all(p > 0 for p, _ in camera.errors), camera.errors
     pans = [p for p, _, _ in camera.joints]
     assert pans[-1] - pans[0] > 1e-3, pans
-    names = {n for n, _ in camera.node.get_topic_names_and_types()}
-    outside = {n for n in names if not n.startswith("/head1/")}
-    assert outside <= {"/diagnostics", "/rosout", "/parameter_events"}, outside
-    assert "/head1/positioner/joint_states" in names and "/head1/track/pan_tilt_error" in names
+    for spec in specs:  # every topic of the head's nodes lies in its namespace but the graph-wide ones
+        names = ({n for n, _ in camera.node.get_publisher_names_and_types_by_node(spec.name, "/head1")}
+                 | {n for n, _ in camera.node.get_subscriber_names_and_types_by_node(spec.name, "/head1")})
+        outside = {n for n in names if not n.startswith("/head1/")}
+        assert names and outside <= {"/diagnostics", "/rosout", "/parameter_events"}, (spec.name, outside)
+    positioner = camera.node.get_publisher_names_and_types_by_node("positioner_bridge", "/head1")
+    assert "/head1/positioner/joint_states" in {n for n, _ in positioner}
     for proc in procs.values():
         assert proc.poll() is None

@@ -34,6 +34,12 @@ ALLOWED_OUTSIDE = {"/diagnostics", "/rosout", "/parameter_events"}
 PERIOD = 0.05  # s between frames of the moving target
 
 
+def node_topics(node: Node, name: str, namespace: str) -> set[str]:
+    """The topics another node publishes or subscribes, as the graph reports them."""
+    return ({n for n, _ in node.get_publisher_names_and_types_by_node(name, namespace)}
+            | {n for n, _ in node.get_subscriber_names_and_types_by_node(name, namespace)})
+
+
 def tracker_args(namespace: str, *extra: str) -> list[str]:
     return ["--ros-args", "-r", f"__ns:={namespace}", "--params-file", str(REPO / "params" / "tracker.yaml"),
             "-p", "fov_h_deg:=20.0", *(a for e in extra for a in ("-p", e))]
@@ -148,14 +154,17 @@ def test_two_namespaced_heads_track_their_own_streams(processes: ProcessSet, pro
             assert b.center_distance(head.truth[s]) < 4.0, (ns, s, b, head.truth[s])
         assert head.states[max(head.states)][0] is TrackState.TRACKING
         assert head.box_frame_ids == {"swir_optical_frame_pixels"}
-    # The whole graph of both heads: every topic lies in a head's namespace but the three graph-wide ones.
-    names = {n for n, _ in probe.node.get_topic_names_and_types()}
-    outside = {n for n in names if not n.startswith(("/head1/", "/head2/"))}
-    assert outside <= ALLOWED_OUTSIDE, sorted(outside)
+    # Every topic and service of each head's tracker, as the graph reports them, lies in its namespace but
+    # the three graph-wide topics.
     for ns in paths:
+        names = node_topics(probe.node, "tracker", ns)
+        outside = {n for n in names if not n.startswith(f"{ns}/")}
+        assert outside <= ALLOWED_OUTSIDE, sorted(outside)
         assert {f"{ns}/track/box", f"{ns}/track/pan_tilt_error", f"{ns}/track/state",
-                f"{ns}/track/state_typed", f"{ns}/track/image_markers"} <= names
-        services = {n for n, _ in probe.node.get_service_names_and_types()}
+                f"{ns}/camera/image_raw", f"{ns}/track/state_typed", f"{ns}/track/image_markers",
+                "/diagnostics"} <= names
+        services = {n for n, _ in probe.node.get_service_names_and_types_by_node("tracker", ns)}
+        assert all(s.startswith(f"{ns}/") for s in services), services
         assert {f"{ns}/track/select", f"{ns}/track/cancel", f"{ns}/tracker/set_parameters"} <= services
 
 

@@ -221,6 +221,7 @@ class TrackerNode(Node):
 
     def _on_tracker_params(self, params: TrackerParams) -> None:
         """New core parameters: a fresh core, re-initialised on the last box at the next frame."""
+        self.selector.end(Verdict(Code.SUPERSEDED, "superseded by a change of the tracker parameters"))
         self.tracker_params = params
         self.tracker = Tracker(params)
         if self.pending_init is None and self.last_box is not None and self.last_result is not None \
