@@ -7,7 +7,6 @@ import dataclasses
 import sys
 import time
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState, RegionOfInterest
@@ -28,29 +27,27 @@ from swir_tracker_ros import topics
 from swir_tracker_ros.core import fhog
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
+from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
+from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node, signals_deferred, user_arguments
 from swir_tracker_ros.nodes.selection import CatchUp, Code, StoredFrame, Verdict
 from swir_tracker_ros.nodes.tracker_node_params import (
-    FORMAT_CHANGE_FRAMES,
-    PARAMS_FILE,
-    TRACKER_PREFIX,
+    FormatWatch,
     FrameStats,
     HeadPoseHistory,
     TrackerNodeParams,
+    fmt_key,
     frame_problem,
-    params_yaml,
-    usage,
 )
 from swir_tracker_ros.nodes.tracker_outputs import ACTIVE, IDLE_RESULT, TrackOutputs
 from swir_tracker_ros.nodes.tracker_selection import MIB, Selector
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
-__all__ = ["DIAG_NAME", "NODE_NAME", "PARAMS_FILE", "TrackerNode", "main", "params_yaml", "usage"]
-
 NODE_NAME = "tracker"
 DIAG_NAME = "swir_tracker/tracker_node"
+TRACKER_PREFIX = "tracker."
 
 
 class TrackerNode(Node):
@@ -72,9 +69,7 @@ class TrackerNode(Node):
         self.last_box: Box | None = None
         self.last_result: TrackResult | None = None
         self.last_stamp = 0.0
-        self.frame_key: tuple | None = None  # (shape, dtype) of the frames being tracked
-        self._new_key: tuple | None = None  # a different format seen while tracking, and how often in a row
-        self._new_key_count = 0
+        self.format = FormatWatch()  # the size and pixel format of the frames being tracked
         self._restart: str | None = None  # why the pending init restarts a running track (never silent)
         self.prev_pose: tuple[float, float] | None = None
         self.window_start = time.monotonic()
@@ -234,7 +229,7 @@ class TrackerNode(Node):
     @property
     def frame_size(self) -> tuple[int, int]:
         """(width, height) of the frames being tracked; (0, 0) before the first."""
-        shape = self.frame_key[0] if self.frame_key else (0, 0)
+        shape = self.format.key[0] if self.format.key else (0, 0)
         return int(shape[1]), int(shape[0])
 
     def adopt(self, job: CatchUp) -> None:
@@ -273,27 +268,15 @@ class TrackerNode(Node):
         return max_age > 0 and stamp > 0 and self.get_clock().now().nanoseconds * 1e-9 - stamp > max_age
 
     def _check_format(self, pixels) -> str | None:
-        """Follow the frame size / pixel format; a reason to skip this frame, or None to track it.
+        """Follow the frame size / pixel format (`FormatWatch`); a reason to skip this frame, or None.
 
-        Without a track or a pending selection a new format is taken at once. Otherwise a frame of another
-        format is skipped until FORMAT_CHANGE_FRAMES of that format arrive in a row; then the core restarts
-        on the last (or the pending) box scaled to the new size. One odd frame (a driver glitch) therefore
-        never ends a track, and a genuine, persistent change re-initialises it.
+        A persistent change restarts the core on the last (or the pending) box scaled to the new size.
         """
-        key = (pixels.shape, pixels.dtype.str)
-        old = self.frame_key
-        if old is None or old == key:
-            self.frame_key, self._new_key, self._new_key_count = key, None, 0
-            return None
         active = self.tracker.state in ACTIVE and self.last_box is not None
-        if active or self.pending_init is not None:  # a track, or a selection made in the old format
-            self._new_key_count = self._new_key_count + 1 if key == self._new_key else 1
-            self._new_key = key
-            if self._new_key_count < FORMAT_CHANGE_FRAMES:
-                return (f"format {_fmt_key(key)} differs from the tracked {_fmt_key(old)} "
-                        f"({self._new_key_count} of {FORMAT_CHANGE_FRAMES} in a row before re-initialising)")
-        (oh, ow), (nh, nw) = old[0][:2], key[0][:2]
-        self.frame_key, self._new_key, self._new_key_count = key, None, 0
+        skip, old = self.format.check(pixels, holding=active or self.pending_init is not None)
+        if old is None:
+            return skip
+        (oh, ow), (nh, nw) = old[0][:2], pixels.shape[:2]
         self.prev_pose = None
         self.selector.history.clear()  # a selection names a frame of the new format
         self.selector.end(Verdict(Code.TRACKER_FAILED, "the image format changed while catching up"))
@@ -304,8 +287,9 @@ class TrackerNode(Node):
             self._restart = "the format change"
         self.tracker.reset()
         if self.pending_init is not None:  # nothing tracked and nothing selected: nothing to say
-            self.get_logger().warning(f"image format changed from {_fmt_key(old)} to {_fmt_key(key)}; "
-                                      f"tracker re-initialised on {_fmt_box(self.pending_init)}")
+            self.get_logger().warning(f"image format changed from {fmt_key(old)} to "
+                                      f"{fmt_key(self.format.key)}; tracker re-initialised on "
+                                      f"{_fmt_box(self.pending_init)}")
         return None
 
     def _skip(self, header: Header, reason: str) -> None:
@@ -384,13 +368,33 @@ def _scale_box(box: Box, sx: float, sy: float) -> Box:
     return Box(box.x * sx, box.y * sy, box.w * sx, box.h * sy)
 
 
-def _fmt_key(key: tuple) -> str:
-    shape, dtype = key
-    return "x".join(map(str, shape)) + f" {np.dtype(dtype).name}"
-
-
 def _fmt_box(box: Box) -> str:
     return "(" + ", ".join(f"{v:.1f}" for v in box.as_tuple()) + ")"
+
+
+def usage() -> str:
+    """`tracker --help`: how to start the node and every parameter with its default."""
+    lines = ["usage: tracker [--help | --params-yaml]",
+             "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
+             "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
+    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
+        lines += usage_lines(cls, prefix)
+    return "\n".join(lines)
+
+
+PARAMS_FILE = ParamsFile(
+    "params/tracker.yaml", "/**",
+    (("", TrackerNodeParams, ""),
+     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
+    "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
+    + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
+    "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "
+    "Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml")
+
+
+def params_yaml() -> str:
+    """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
+    return render_params_file(PARAMS_FILE)
 
 
 def main(argv: list[str] | None = None) -> int:

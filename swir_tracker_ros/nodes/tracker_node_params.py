@@ -1,6 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Tracker-node parameters (with `--help` and `--params-yaml`) and its small bookkeeping helpers (frame
-statistics, head-pose history)."""
+"""Tracker-node parameters and its small bookkeeping helpers (frame statistics, head-pose history)."""
 
 from __future__ import annotations
 
@@ -13,12 +12,8 @@ import numpy as np
 
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
-from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
-from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.paramfield import param, validate_params
-from swir_tracker_ros.tracker import TrackerParams
 
-TRACKER_PREFIX = "tracker."
 CLICK_MSGS = ("point", "point_stamped", "off")
 
 
@@ -108,6 +103,40 @@ def frame_problem(pixels: np.ndarray) -> str | None:
     if pixels.dtype.kind == "f" and not np.isfinite(pixels).all():
         return f"{height}x{width} {pixels.dtype} frame has NaN or infinite pixels"
     return None
+
+
+def fmt_key(key: tuple) -> str:
+    """`240x320 uint16` for a (shape, dtype string) format key."""
+    shape, dtype = key
+    return "x".join(map(str, shape)) + f" {np.dtype(dtype).name}"
+
+
+class FormatWatch:
+    """The (shape, dtype) of the frames being tracked. A frame of another format is taken at once while
+    nothing is held (no track, no pending selection); otherwise frames of it are skipped until
+    FORMAT_CHANGE_FRAMES arrive in a row, so that one odd frame (a driver glitch) never ends a track and a
+    genuine, persistent change re-initialises it."""
+
+    def __init__(self) -> None:
+        self.key: tuple | None = None
+        self._new: tuple | None = None  # a different format seen while holding, and how often in a row
+        self._count = 0
+
+    def check(self, pixels: np.ndarray, holding: bool) -> tuple[str | None, tuple | None]:
+        """(why this frame is skipped, or None; the previous format when this frame changes it, or None)."""
+        key = (pixels.shape, pixels.dtype.str)
+        old = self.key
+        if old is None or old == key:
+            self.key, self._new, self._count = key, None, 0
+            return None, None
+        if holding:
+            self._count = self._count + 1 if key == self._new else 1
+            self._new = key
+            if self._count < FORMAT_CHANGE_FRAMES:
+                return (f"format {fmt_key(key)} differs from the tracked {fmt_key(old)} ({self._count} of "
+                        f"{FORMAT_CHANGE_FRAMES} in a row before re-initialising)"), None
+        self.key, self._new, self._count = key, None, 0
+        return None, old
 
 
 class HeadPoseHistory:
@@ -212,28 +241,3 @@ class FrameStats:
         self.errors = 0
         self.latency_ms, self.core_ms, self.age_ms, self.overhead_ms = [], [], [], []
         return values, trouble
-
-
-def usage() -> str:
-    """`tracker --help`: how to start the node and every parameter with its default."""
-    lines = ["usage: tracker [--help | --params-yaml]",
-             "       tracker --ros-args --params-file params/tracker.yaml [-p name:=value ...]",
-             "", "Tracks one target in a SWIR image stream; see docs/tracker_node.md.", "", "parameters:"]
-    for prefix, cls in (("", TrackerNodeParams), (TRACKER_PREFIX, TrackerParams)):
-        lines += usage_lines(cls, prefix)
-    return "\n".join(lines)
-
-
-PARAMS_FILE = ParamsFile(
-    "params/tracker.yaml", "/**",
-    (("", TrackerNodeParams, ""),
-     ("tracker", TrackerParams, "the tracking core (swir_tracker_ros.tracker.TrackerParams)")),
-    "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
-    + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "
-    "enforced; invalid runtime changes are rejected. `tracker --params-yaml` prints the same text. "
-    "Use: ros2 run swir_tracker_ros tracker --ros-args --params-file params/tracker.yaml")
-
-
-def params_yaml() -> str:
-    """`tracker --params-yaml`: a params file with every parameter at its default, documented."""
-    return render_params_file(PARAMS_FILE)
