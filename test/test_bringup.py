@@ -31,6 +31,7 @@ from msg_adapters.image import numpy_to_image
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.selection import selection_result
 from msg_adapters.stamps import header, stamp_to_seconds
+from swir_tracker_interfaces.msg import TrackState as TrackStateMsg
 from swir_tracker_interfaces.srv import SelectTarget
 from swir_tracker_ros.harness import cli
 from swir_tracker_ros.harness.bagio import read_frames
@@ -135,6 +136,9 @@ class Camera(SpinningProbe):
         self.boxes: dict[float, Box | None] = {}
         self.errors: list[tuple[float, float]] = []
         self.joints: list[tuple[float, float, float]] = []
+        self.answered: set[float] = set()  # frames the head answered on track/state_typed
+        n.create_subscription(TrackStateMsg, "/head1/track/state_typed",
+                              lambda m: self.answered.add(stamp_to_seconds(m.header.stamp)), 10)
         n.create_subscription(PolygonStamped, "/head1/track/box",
                               lambda m: self.boxes.__setitem__(stamp_to_seconds(m.header.stamp),
                                                                box_from_polygon(m)), 10)
@@ -142,6 +146,19 @@ class Camera(SpinningProbe):
                               lambda m: self.errors.append(pan_tilt_error_from_msg(m)[:2]), 10)
         n.create_subscription(JointState, "/head1/positioner/joint_states",
                               lambda m: self.joints.append(joint_state_to_pan_tilt(m)), 10)
+
+
+    def play(self, image, after: float, period: float) -> float:
+        """Publish one frame `period` after the previous one (a camera at 1 / period Hz) and wait until the
+        head answered it; a frame lost while DDS discovery settles is sent again with a new stamp."""
+        for _ in range(5):
+            stamp = round(max(after + period, time.time()), 6)
+            self.spin_until(lambda s=stamp: time.time() >= s, period)
+            self.image.publish(numpy_to_image(image, header(stamp, "camera1_optical_frame")))
+            if self.spin_until(lambda s=stamp: s in self.answered, 3.0):
+                return stamp
+            after = stamp
+        raise AssertionError("the head answered none of 5 frames")
 
 
 @pytest.fixture
@@ -168,27 +185,26 @@ def test_bringup_against_pelco_sim_with_a_bag_as_the_camera(processes: ProcessSe
     assert camera.spin_until(lambda: camera.image.get_subscription_count() > 0
                              and camera.select.service_is_ready(), 60.0), processes.log(procs["tracker"])
     assert camera.spin_until(lambda: len(camera.joints) > 0, 30.0), processes.log(procs["positioner_bridge"])
-    period = 1.0 / 25
-    t0 = time.time()
-    stamps = []
-    for k, fr in enumerate(frames):  # played at its own rate, stamped now (a live camera)
-        stamp = round(t0 + k * period, 6)
-        stamps.append(stamp)
-        camera.image.publish(numpy_to_image(fr.image, header(stamp, "camera1_optical_frame")))
-        camera.spin_until(lambda: False, max(0.0, t0 + (k + 1) * period - time.time()))
-        if k == 4:  # the operator picks the target on the first frame they saw
+    # The bag plays at 10 Hz (the camera of a slow site; it leaves room on a loaded test machine), each frame
+    # once the head has answered the one before.
+    stamps: list[float] = []
+    for k, fr in enumerate(frames):
+        stamps.append(camera.play(fr.image, stamps[-1] if stamps else time.time(), 0.1))
+        if k == 4:  # the operator picks the target on the first frame they saw, 0.4 s later
             height, width = fr.image.shape[:2]
             roi = box_to_roi(frames[0].gt, width, height)
-            request = SelectTarget.Request(header=header(stamps[0]), box=roi)
-            answer = camera.select.call_async(request)
+            answer = camera.select.call_async(SelectTarget.Request(header=header(stamps[0]), box=roi))
     assert camera.spin_until(answer.done, 10.0)
     accepted, code, reason, start_stamp, _ = selection_result(answer.result())
     assert accepted, (code, reason)
-    assert start_stamp == pytest.approx(stamps[0], abs=0.1)  # that frame, or the nearest one received
+    assert start_stamp == pytest.approx(stamps[0], abs=1e-6)
     truth = {s: fr.gt for s, fr in zip(stamps, frames)}
     camera.spin_until(lambda: False, 1.0)
-    tracked = [(s, b) for s, b in camera.boxes.items() if b is not None and truth.get(s) is not None]
-    assert len(tracked) >= 30, len(tracked)
+    # From the frame the caught-up track was first published on, every frame has a box on the target.
+    first = min(s for s, b in camera.boxes.items() if b is not None)
+    tracked = [(s, camera.boxes.get(s)) for s in stamps if s >= first]
+    assert all(b is not None for _, b in tracked), tracked
+    assert len(tracked) >= 30, (len(tracked), first, stamps[:10])
     mean_iou = sum(b.iou(truth[s]) for s, b in tracked) / len(tracked)
     assert mean_iou > 0.5, mean_iou
     # The bridge drove the simulated head (address 3 on the socket) the way the error asks (the sign check
