@@ -6,9 +6,10 @@
 
 Every node reads its params file from share/swir_tracker_ros/params. With sim_head:=true (default) the
 simulated head serves a pty whose path is kept as a symlink at `sim_link`, and the bridge opens that link.
-The tracker starts on the pedestrian with an init box computed from the scene at the head's rest pose
-(set init_from_scene:=false to select the target yourself on /track/init). `demo` (docs/demo.md) runs the
-same graph without a ROS install and adds recording and the report.
+With the simulated head the tracker starts on the pedestrian with an init box computed from the scene at
+the head's rest pose (init_from_scene:=auto, the default; with sim_head:=false nothing is selected: pick
+the target on track/select, a click, or track/init). For a real head and camera use bringup.launch.py.
+`demo` (docs/demo.md) runs the same graph without a ROS install and adds recording and the report.
 """
 
 from __future__ import annotations
@@ -42,7 +43,8 @@ def _graph(context, *_args, **_kwargs):
         "max_accel")}
     port = arg["sim_link"] if _truthy(arg["sim_head"]) else arg["port"]
     tracker_overrides = {"ego_motion_compensation": _truthy(arg["ego_motion_compensation"])}
-    if _truthy(arg["init_from_scene"]):
+    init = arg["init_from_scene"].strip().lower()
+    if _truthy(init) if init != "auto" else _truthy(arg["sim_head"]):
         from swir_tracker_ros.scene.demo_scene import initial_target_box
 
         tracker_overrides["init_box"] = initial_target_box(arg["scene"], int(arg["seed"]))
@@ -80,7 +82,8 @@ def generate_launch_description() -> LaunchDescription:
             "scene rendered by scene_camera: demo, a harder variant (demo_crossing, demo_long_occlusion, "
             "demo_fast, demo_low_contrast, demo_shake) or a harness scenario")),
         DeclareLaunchArgument("seed", default_value="7", description="scene seed"),
-        DeclareLaunchArgument("init_from_scene", default_value="true",
-                              description="start tracking the scene's pedestrian on the first frame"),
+        DeclareLaunchArgument("init_from_scene", default_value="auto", description=(
+            "start tracking the scene's pedestrian on the first frame: true, false, or auto (true with "
+            "sim_head, false with a real head: select the target on track/select or track/init)")),
         OpaqueFunction(function=_graph),
     ])

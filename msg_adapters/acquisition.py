@@ -17,10 +17,12 @@ from visualization_msgs.msg import Marker, MarkerArray
 from msg_adapters.debug_image import to_bgr8
 from msg_adapters.errors import MessageError
 from msg_adapters.image import numpy_to_image
+from swir_tracker_ros import topics
 from swir_tracker_ros.types import Box
 
-TRACKS_NS = "acquisition/tracks"
-CANDIDATES_NS = "acquisition/candidates"
+# Marker namespaces: the (relative) names of the topics the markers travel on.
+TRACKS_NS = topics.ACQUISITION_TRACKS
+CANDIDATES_NS = topics.ACQUISITION_CANDIDATES
 
 
 @dataclass(frozen=True)

@@ -1,13 +1,15 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The /track/debug_image picture: the frame as 8-bit BGR with the box, search windows and state drawn."""
+"""The `track/debug_image` picture (raw bgr8 or JPEG): the frame as 8-bit BGR with the box, search windows
+and state drawn."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
 
+from msg_adapters.compressed import numpy_to_compressed
 from msg_adapters.image import numpy_to_image
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
@@ -46,6 +48,17 @@ def _rect(img: np.ndarray, box: Box, colour: tuple[int, int, int], thickness: in
 
 def render_debug(frame: np.ndarray, result: TrackResult | None, header: Header) -> Image:
     """bgr8 Image of `frame` with search windows (orange), the box (colour by state) and a status line."""
+    return numpy_to_image(debug_picture(frame, result), header, "bgr8")
+
+
+def render_debug_compressed(frame: np.ndarray, result: TrackResult | None, header: Header,
+                            quality: int = 80) -> CompressedImage:
+    """The same picture as a JPEG CompressedImage (image_transport's `compressed` transport)."""
+    return numpy_to_compressed(debug_picture(frame, result), header, "jpeg", quality)
+
+
+def debug_picture(frame: np.ndarray, result: TrackResult | None) -> np.ndarray:
+    """HxWx3 BGR uint8: the frame, the search windows (orange), the box (colour by state), a status line."""
     img = to_bgr8(frame)
     state = result.state if result is not None else TrackState.IDLE
     if result is not None and state is not TrackState.IDLE:
@@ -57,4 +70,4 @@ def render_debug(frame: np.ndarray, result: TrackResult | None, header: Header) 
     else:
         text = state.value
     cv2.putText(img, text, (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.4, COLOURS[state], 1, cv2.LINE_AA)
-    return numpy_to_image(img, header, "bgr8")
+    return img

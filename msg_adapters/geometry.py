@@ -7,6 +7,7 @@ import math
 from typing import TYPE_CHECKING
 
 from msg_adapters.backend import (
+    HEADER,
     POINT32,
     POLYGON,
     POLYGON_STAMPED,
@@ -27,8 +28,30 @@ if TYPE_CHECKING:
     from std_msgs.msg import Header
 
 
+# A frame_id for pixel coordinates: `geometry_msgs` values are metres in their frame, so a box in pixels must
+# not carry the camera's (TF) frame, where RViz would draw a pixel as a metre. `<image frame_id>_pixels` names
+# the image plane of that camera and is no TF frame (nothing can transform it).
+PIXEL_FRAME_SUFFIX = "_pixels"
+PIXEL_FRAME_DEFAULT = "image_pixels"  # for an image without a frame_id
+
+
+def pixel_frame_id(image_frame_id: str) -> str:
+    """The frame_id of pixel-coordinate outputs of the image with `image_frame_id` (see above)."""
+    return f"{image_frame_id}{PIXEL_FRAME_SUFFIX}" if image_frame_id else PIXEL_FRAME_DEFAULT
+
+
+def pixel_header(image_header: Header, backend: Backend = RCLPY) -> Header:
+    """The image's stamp with `pixel_frame_id` of its frame_id: the header of `track/box`."""
+    try:
+        stamp, frame_id = image_header.stamp, str(image_header.frame_id)
+    except AttributeError as exc:
+        raise MessageError(f"{type(image_header).__name__} is not a std_msgs/Header") from exc
+    return backend.cls(HEADER)(stamp=stamp, frame_id=pixel_frame_id(frame_id))
+
+
 def box_to_polygon(box: Box | None, header: Header, backend: Backend = RCLPY) -> PolygonStamped:
-    """Four corners TL, TR, BR, BL (x = column, y = row, z = 0); None gives the empty polygon (absent)."""
+    """Four corners TL, TR, BR, BL (x = column, y = row, z = 0, pixels); None gives the empty polygon
+    (absent). Give it a `pixel_header`: the coordinates are pixels, not metres."""
     points = []
     if box is not None:
         x0, y0, x1, y1 = box.x, box.y, box.x + box.w, box.y + box.h

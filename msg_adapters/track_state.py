@@ -1,12 +1,17 @@
 # SPDX-License-Identifier: Apache-2.0
-"""TrackResult <-> diagnostic_msgs/DiagnosticArray on /track/state (status `swir_tracker/track`)."""
+"""TrackResult <-> `track/state` (diagnostic_msgs/DiagnosticArray, status `swir_tracker/track`) and
+`track/state_typed` (swir_tracker_interfaces/msg/TrackState)."""
 
 from __future__ import annotations
+
+from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from std_msgs.msg import Header
 
+from msg_adapters.backend import RCLPY, Backend
 from msg_adapters.errors import MessageError
+from msg_adapters.geometry import box_from_roi, box_to_roi
 from swir_tracker_ros.types import Box, SearchMode, TrackResult, TrackState
 
 STATUS_NAME = "swir_tracker/track"
@@ -100,3 +105,35 @@ def track_result_from_msg(msg: DiagnosticArray, box: Box | None = None) -> Track
         huber_threshold=_float(values, "huber_threshold"), search_mode=mode, measured=measured == "true",
         scale=_float(values, "scale"),
     )
+
+
+# ---------------------------------------------------------------- swir_tracker_interfaces/msg/TrackState
+TYPED_STATE = "swir_tracker_interfaces/msg/TrackState"
+_STATE_CODES = {TrackState.IDLE: "IDLE", TrackState.TRACKING: "TRACKING", TrackState.OCCLUDED: "OCCLUDED",
+                TrackState.LOST: "LOST"}
+_MODE_CODES = {SearchMode.NORMAL: "SEARCH_NORMAL", SearchMode.MULTI_WINDOW: "SEARCH_MULTI_WINDOW"}
+
+
+def typed_state_msg(result: TrackResult, header: Header, frames_occluded: int, width: int, height: int,
+                    backend: Backend = RCLPY) -> Any:
+    """`track/state_typed`: the frame's state as typed fields; the box (outward to whole pixels, clipped to
+    the width x height image) only while tracking or occluded, all zero otherwise."""
+    cls = backend.cls(TYPED_STATE)
+    active = result.state in (TrackState.TRACKING, TrackState.OCCLUDED) and result.box.is_finite()
+    roi = box_to_roi(result.box if active else Box(0.0, 0.0, 0.0, 0.0), width, height, backend)
+    return cls(header=header, state=getattr(cls, _STATE_CODES[result.state]), box=roi,
+               peak=float(result.peak), psr=float(result.psr), apce=float(result.apce),
+               huber_threshold=float(result.huber_threshold),
+               search_mode=getattr(cls, _MODE_CODES[result.search_mode]), measured=bool(result.measured),
+               scale=float(result.scale), frames_occluded=max(int(frames_occluded), 0))
+
+
+def typed_state_from_msg(msg: Any) -> tuple[TrackState, Box | None]:
+    """(state, box or None when absent) of a `track/state_typed` message; `MessageError` if unreadable."""
+    names = {getattr(type(msg), code, None): state for state, code in _STATE_CODES.items()}
+    try:
+        state = names[int(msg.state)]
+        box = box_from_roi(msg.box) if msg.box.width and msg.box.height else None
+    except (AttributeError, KeyError, TypeError, ValueError) as exc:
+        raise MessageError(f"TrackState is not readable ({exc})") from exc
+    return state, box

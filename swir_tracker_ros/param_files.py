@@ -13,8 +13,8 @@ from pathlib import Path
 
 from swir_tracker_ros.configs import ConfigurationChoice
 from swir_tracker_ros.demo import config as demo_config
-from swir_tracker_ros.nodes import acquisition_node, positioner_node, tracker_node
-from swir_tracker_ros.nodes.param_docs import ParamsFile, params_yaml, replace_table
+from swir_tracker_ros.nodes import acquisition_node, positioner_node, tracker_endpoints, tracker_node
+from swir_tracker_ros.nodes.param_docs import ParamsFile, markdown_table, marker, params_yaml, replace_block
 from swir_tracker_ros.nodes.tracker_node_params import TrackerNodeParams
 from swir_tracker_ros.pelco.params import PositionerParams
 from swir_tracker_ros.simulation import scene_camera_node
@@ -37,16 +37,23 @@ def documented_tables() -> list[tuple[str, type, str]]:
             ("docs/positioner.md", PositionerParams, "")]
 
 
+def other_tables() -> list[tuple[str, str, str]]:
+    """(docs file, marker line, generated table) of the generated tables that are not parameters."""
+    return [("docs/tracker_node.md", tracker_endpoints.MARKER, tracker_endpoints.markdown_table())]
+
+
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     repo = Path(args[0]) if args else REPO
-    for rel, cls, prefix in documented_tables():
+    tables = [(rel, marker(cls, prefix), markdown_table(cls, prefix))
+              for rel, cls, prefix in documented_tables()]
+    for rel, mark, table in [*tables, *other_tables()]:
         path = repo / rel
         text = path.read_text()
-        new = replace_table(text, cls, prefix)
+        new = replace_block(text, mark, table)
         if new != text:
             path.write_text(new)
-            print(f"updated {rel}: {cls.__name__}")
+            print(f"updated {rel}: {mark[5:60]}...")
     for pf in params_files():
         path = repo / pf.path
         new = params_yaml(pf)

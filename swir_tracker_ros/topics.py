@@ -3,35 +3,70 @@
 
 Plain values, no rclpy: nodes, the demo, the harness and parameter defaults import the names from here;
 `msg_adapters.qos.profile` turns a `QoS` into an rclpy `QoSProfile`.
+
+Every name of a head (camera, tracker, positioner, acquisition, simulated scene) is relative: it resolves in
+the node's namespace, so `--ros-args -r __ns:=/head1` moves a whole head and two heads share one graph.
+Only the graph-wide names are absolute (`/diagnostics`, `/clock`). A rosbag2 recording stores fully
+qualified names: `absolute(name)` is a name as a head in the root namespace publishes it (the bag harness,
+the demo's recordings).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-# Topics and services, by the role they play in the graph.
-IMAGE = "/camera/image_raw"
-CAMERA_INFO = "/camera/camera_info"
-JOINT_STATES = "/positioner/joint_states"
-TRACK_INIT = "/track/init"
-TRACK_CANCEL = "/track/cancel"  # std_srvs/Trigger service
-TRACK_BOX = "/track/box"
-PAN_TILT_ERROR = "/track/pan_tilt_error"
-TRACK_STATE = "/track/state"
-TRACK_DEBUG_IMAGE = "/track/debug_image"
+# Topics and services of one head, by the role they play (relative names).
+IMAGE = "camera/image_raw"
+CAMERA_INFO = "camera/camera_info"
+JOINT_STATES = "positioner/joint_states"
+TRACK_INIT = "track/init"
+TRACK_SELECT = "track/select"  # swir_tracker_interfaces/srv/SelectTarget service
+TRACK_CANCEL = "track/cancel"  # std_srvs/Trigger service
+TRACK_BOX = "track/box"
+PAN_TILT_ERROR = "track/pan_tilt_error"
+TRACK_STATE = "track/state"
+TRACK_STATE_TYPED = "track/state_typed"
+TRACK_MARKERS = "track/image_markers"
+TRACK_DEBUG_IMAGE = "track/debug_image"
+GROUND_TRUTH_BOX = "ground_truth/box"
+GROUND_TRUTH_STATE = "ground_truth/state"
+GROUND_TRUTH_OCCLUDED = "ground_truth/occluded"
+SCENE_START = "scene/start"  # std_srvs/Trigger service
+ACQUISITION_TRACKS = "acquisition/tracks"
+ACQUISITION_CANDIDATES = "acquisition/candidates"
+ACQUISITION_SELECT = "acquisition/select"
+ACQUISITION_DEBUG_IMAGE = "acquisition/debug_image"
+# Graph-wide names (absolute): every node's health, and the simulated clock.
 DIAGNOSTICS = "/diagnostics"
-GROUND_TRUTH_BOX = "/ground_truth/box"
-GROUND_TRUTH_STATE = "/ground_truth/state"
-GROUND_TRUTH_OCCLUDED = "/ground_truth/occluded"
-SCENE_START = "/scene/start"  # std_srvs/Trigger service
-ACQUISITION_TRACKS = "/acquisition/tracks"
-ACQUISITION_CANDIDATES = "/acquisition/candidates"
-ACQUISITION_SELECT = "/acquisition/select"
-ACQUISITION_DEBUG_IMAGE = "/acquisition/debug_image"
 CLOCK = "/clock"
 
+# image_transport's naming (image_transport / rqt_image_view): a base image topic's transports and clicks.
+TRANSPORTS = ("raw", "compressed")
+COMPRESSED_SUFFIX = "/compressed"
+MOUSE_LEFT_SUFFIX = "_mouse_left"
+
+
+def transport_topic(image_topic: str, transport: str) -> str:
+    """The topic an image_transport `transport` of the base `image_topic` travels on (`<base>/compressed`)."""
+    if transport not in TRANSPORTS:
+        raise ValueError(f"image transport {transport!r} is not one of {TRANSPORTS}")
+    return image_topic if transport == "raw" else image_topic + COMPRESSED_SUFFIX
+
+
+def mouse_left_topic(image_topic: str) -> str:
+    """Where rqt_image_view publishes a left click on the image `image_topic` (`<base>_mouse_left`)."""
+    return image_topic + MOUSE_LEFT_SUFFIX
+
+
+def absolute(name: str, namespace: str = "/") -> str:
+    """`name` resolved in `namespace` (no remapping, no `~`): `camera/image_raw` -> `/camera/image_raw`."""
+    if name.startswith("/"):
+        return name
+    return namespace.rstrip("/") + "/" + name
+
+
 # The message type of every topic (ROS type names: rosbag2 connections, rclpy classes via msg_adapters).
-TYPES: dict[str, str] = {
+_TYPES: dict[str, str] = {
     IMAGE: "sensor_msgs/msg/Image",
     CAMERA_INFO: "sensor_msgs/msg/CameraInfo",
     JOINT_STATES: "sensor_msgs/msg/JointState",
@@ -39,6 +74,8 @@ TYPES: dict[str, str] = {
     TRACK_BOX: "geometry_msgs/msg/PolygonStamped",
     PAN_TILT_ERROR: "geometry_msgs/msg/Vector3Stamped",
     TRACK_STATE: "diagnostic_msgs/msg/DiagnosticArray",
+    TRACK_STATE_TYPED: "swir_tracker_interfaces/msg/TrackState",
+    TRACK_MARKERS: "visualization_msgs/msg/ImageMarker",
     TRACK_DEBUG_IMAGE: "sensor_msgs/msg/Image",
     DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray",
     GROUND_TRUTH_BOX: "geometry_msgs/msg/PolygonStamped",
@@ -49,6 +86,13 @@ TYPES: dict[str, str] = {
     ACQUISITION_SELECT: "std_msgs/msg/UInt32",
     ACQUISITION_DEBUG_IMAGE: "sensor_msgs/msg/Image",
     CLOCK: "rosgraph_msgs/msg/Clock",
+}
+# By the relative name and by the name in the root namespace (what a bag of a root-namespace head holds).
+TYPES: dict[str, str] = {**_TYPES, **{absolute(name): kind for name, kind in _TYPES.items()}}
+SERVICE_TYPES: dict[str, str] = {
+    TRACK_SELECT: "swir_tracker_interfaces/srv/SelectTarget",
+    TRACK_CANCEL: "std_srvs/srv/Trigger",
+    SCENE_START: "std_srvs/srv/Trigger",
 }
 
 

@@ -15,7 +15,7 @@ from swir_tracker_ros.paramfield import validate_params
 
 def test_yaml_covers_every_field_with_its_default() -> None:
     doc = yaml.safe_load((REPO / "params" / "acquisition.yaml").read_text())
-    values = doc["acquisition"]["ros__parameters"]
+    values = doc["/**"]["ros__parameters"]
     mot = values.pop("mot")
     for cls, given in ((AcquisitionParams, values), (MotParams, mot)):
         assert set(given) == {f.name for f in fields(cls)}, cls.__name__

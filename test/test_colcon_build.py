@@ -16,25 +16,38 @@ PKG = "swir_tracker_ros"
 COLCON = Path(sys.prefix) / "bin" / "colcon"
 
 
+IFACES = "swir_tracker_interfaces"
+
+
 @pytest.fixture(scope="module")
 def prefix(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Install prefix of the package after an isolated (default) colcon build outside the source tree."""
+    """Install prefix of the package after an isolated (default) colcon build outside the source tree, of
+    both packages as the README says (the nested interface package is a base path of its own: colcon's crawl
+    stops at the repository root's package.xml). The venv stands in for /opt/ros/jazzy (`make venv` fixed
+    its CMake exports, swir_tracker_interfaces/build_in_venv.py)."""
     assert COLCON.exists(), f"colcon is not installed in {sys.prefix}; run `make venv`"
     ws = tmp_path_factory.mktemp("colcon")
+    env = dict(os.environ, AMENT_PREFIX_PATH=sys.prefix, CMAKE_PREFIX_PATH=sys.prefix,
+               PATH=f"{Path(sys.prefix) / 'bin'}{os.pathsep}{os.environ.get('PATH', '')}")
     proc = subprocess.run(
-        [str(COLCON), "--log-base", str(ws / "log"), "build", "--paths", str(REPO),
-         "--build-base", str(ws / "build"), "--install-base", str(ws / "install")],
-        cwd=ws, capture_output=True, text=True, timeout=300)
+        [str(COLCON), "--log-base", str(ws / "log"), "build", "--base-paths", str(REPO), str(REPO / IFACES),
+         "--build-base", str(ws / "build"), "--install-base", str(ws / "install"),
+         "--cmake-args", f"-DPython3_EXECUTABLE={sys.executable}", "-DBUILD_TESTING=OFF"],
+        cwd=ws, capture_output=True, text=True, timeout=600, env=env)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert f"Finished <<< {IFACES}" in proc.stdout and f"Finished <<< {PKG}" in proc.stdout, proc.stdout
     return ws / "install" / PKG
 
 
 def installed_env(prefix: Path) -> dict[str, str]:
-    """What `source install/setup.bash` provides for this package: its site-packages first on the path."""
+    """What `source install/setup.bash` provides for both packages: their site-packages first on the path,
+    the interface package's type-support libraries on the library path."""
     env = dict(os.environ)
-    site = next((prefix / "lib").glob("python3*/site-packages"))
-    env["PYTHONPATH"] = os.pathsep.join([str(site), env.get("PYTHONPATH", "")])
-    env["AMENT_PREFIX_PATH"] = str(prefix)
+    ifaces = prefix.parent / IFACES
+    sites = [str(next((p / "lib").glob("python3*/site-packages"))) for p in (prefix, ifaces)]
+    env["PYTHONPATH"] = os.pathsep.join([*sites, env.get("PYTHONPATH", "")])
+    env["LD_LIBRARY_PATH"] = os.pathsep.join([str(ifaces / "lib"), env.get("LD_LIBRARY_PATH", "")])
+    env["AMENT_PREFIX_PATH"] = os.pathsep.join([str(prefix), str(ifaces)])
     env["PYTHONUNBUFFERED"] = "1"
     return env
 
@@ -48,6 +61,21 @@ def test_install_layout(prefix: Path) -> None:
     for exe in ("tracker", "positioner_bridge"):
         path = prefix / "lib" / PKG / exe
         assert path.is_file() and os.access(path, os.X_OK), path
+    assert (prefix / "share" / PKG / "launch" / "bringup.launch.py").is_file()
+    ifaces = prefix.parent / IFACES
+    assert (ifaces / "share" / IFACES / "srv" / "SelectTarget.srv").is_file()
+    assert (ifaces / "share" / "ament_index" / "resource_index" / "packages" / IFACES).is_file()
+
+
+def test_installed_interfaces_import_from_the_install(prefix: Path) -> None:
+    code = ("import swir_tracker_interfaces; from swir_tracker_interfaces.srv import SelectTarget; "
+            "from swir_tracker_interfaces.msg import TrackState; "
+            "print(swir_tracker_interfaces.__file__, SelectTarget.Response.STAMP_TOO_OLD, TrackState.LOST)")
+    out = subprocess.run([sys.executable, "-c", code], env=installed_env(prefix), capture_output=True,
+                         text=True, timeout=60, cwd=prefix)
+    assert out.returncode == 0, out.stderr
+    where, too_old, lost = out.stdout.split()
+    assert where.startswith(str(prefix.parent / IFACES)) and (too_old, lost) == ("2", "3"), out.stdout
 
 
 def test_installed_tracker_prints_help_from_the_install(prefix: Path) -> None:

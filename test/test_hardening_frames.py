@@ -68,8 +68,8 @@ class Node:
             Parameter("init_box", value=[x, y, float(TW), float(TW)]),
             Parameter("ego_motion_compensation", value=False)])
         self.states, self.boxes = [], []
-        self.node.pub_state.publish = self.states.append
-        self.node.pub_box.publish = self.boxes.append
+        self.node.outputs.state.publish = self.states.append
+        self.node.outputs.box.publish = self.boxes.append
         self.t = 1.0
         self.k = 0
 

@@ -42,7 +42,8 @@ ALLOWED: dict[str, set[str]] = {
 ALLOWED["param_files"] = set(ALLOWED) - {"param_files"}
 ROS_FREE = BASE | PRODUCT | {"scene"}
 ROS_MODULES = {"rclpy", "rosidl_runtime_py", "builtin_interfaces", "std_msgs", "sensor_msgs", "geometry_msgs",
-               "diagnostic_msgs", "std_srvs", "visualization_msgs", "rosgraph_msgs"}
+               "diagnostic_msgs", "std_srvs", "visualization_msgs", "rosgraph_msgs",
+               "swir_tracker_interfaces"}
 
 
 def _layer(module: str) -> str | None:
@@ -146,7 +147,8 @@ def test_the_field_pattern_catches_the_old_leaks(code: str) -> None:
     assert FIELD_ACCESS.search(code), code
 
 
-TOPIC = re.compile(r"/(camera|track|positioner|ground_truth|scene|acquisition|diagnostics|clock)(/\w+)*")
+# a head's names are relative (`track/box`), the graph-wide ones absolute (`/diagnostics`); either spelling
+TOPIC = re.compile(r"/?(camera|track|positioner|ground_truth|scene|acquisition)(/\w+)+|/(diagnostics|clock)")
 
 
 def test_topic_names_and_qos_profiles_are_defined_once() -> None:
@@ -164,3 +166,9 @@ def test_topic_names_and_qos_profiles_are_defined_once() -> None:
                     getattr(node.func, "id", getattr(node.func, "attr", None)) == "QoSProfile":
                 hits.append(f"{p.relative_to(REPO)}:{node.lineno}: QoSProfile(...)")
     assert not hits, "names: swir_tracker_ros/topics.py; QoS: topics + msg_adapters.qos\n" + "\n".join(hits)
+
+
+@pytest.mark.parametrize("name", ["track/box", "/track/box", "camera/image_raw", "positioner/joint_states",
+                                  "/diagnostics", "ground_truth/box"])
+def test_the_topic_pattern_catches_both_spellings(name: str) -> None:
+    assert TOPIC.fullmatch(name), name

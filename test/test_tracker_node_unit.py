@@ -50,10 +50,13 @@ def scene(cx: float, cy: float, width: int = W, height: int = H, seed: int = 0) 
 
 class Capture:
     def __init__(self, node: TrackerNode) -> None:
-        self.box, self.error, self.state, self.diag = [], [], [], []
-        node.pub_box.publish = self.box.append
-        node.pub_error.publish = self.error.append
-        node.pub_state.publish = self.state.append
+        self.box, self.error, self.state, self.diag, self.typed, self.markers = [], [], [], [], [], []
+        out = node.outputs
+        out.box.publish = self.box.append
+        out.error.publish = self.error.append
+        out.state.publish = self.state.append
+        out.typed.publish = self.typed.append
+        out.image_markers.publish = self.markers.append
         node.pub_diag.publish = self.diag.append
 
 
@@ -81,7 +84,8 @@ def test_tracks_from_init_box_param_and_publishes_with_image_header(context: Con
         fx = (W / 2) / math.tan(math.radians(15.0))
         assert pan == pytest.approx(math.atan2(W / 2 - box.cx, fx)) and pan < 0  # target right of centre
         assert tilt == pytest.approx(math.atan2(H / 2 - box.cy, fx))  # square pixels: fy = fx
-        assert cap.box[-1].header.frame_id == "swir"
+        assert cap.box[-1].header.frame_id == "swir_pixels"  # pixels, not metres in the camera frame
+        assert cap.error[-1].header.frame_id == "swir"
     finally:
         node.destroy_node()
 
@@ -236,12 +240,12 @@ def test_frame_stats_counts_skipped_frames_and_head_history() -> None:
 def test_debug_image_only_with_subscribers(context: Context) -> None:
     node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
     debug: list[Image] = []
-    node.pub_debug.publish = debug.append
+    node.outputs.debug.publish = debug.append
     try:
         feed(node, scene(100, 96), 1.0)
         assert not debug
         node.create_subscription(Image, "/track/debug_image", lambda _m: None, 1)
-        assert node.pub_debug.get_subscription_count() == 1
+        assert node.outputs.debug.get_subscription_count() == 1
         feed(node, scene(102, 96), 1.04)
         assert len(debug) == 1 and debug[0].encoding == "bgr8" and (debug[0].width, debug[0].height) == (W, H)
         pixels = np.frombuffer(debug[0].data, np.uint8).reshape(H, W, 3)

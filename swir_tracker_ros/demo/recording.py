@@ -48,7 +48,9 @@ class BagRecorder:
             return
         conn = self._connections.get(topic)
         if conn is None:
-            conn = self._writer.add_connection(topic, RECORDED_TOPICS[topic], typestore=self._typestore)
+            # a bag holds fully qualified names: the graph runs in the root namespace (topics.absolute)
+            conn = self._writer.add_connection(topics.absolute(topic), RECORDED_TOPICS[topic],
+                                               typestore=self._typestore)
             self._connections[topic] = conn
         self._writer.write(conn, stamp_ns, data)
         self.counts[topic] = self.counts.get(topic, 0) + 1

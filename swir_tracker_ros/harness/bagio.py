@@ -31,8 +31,10 @@ except ImportError:  # pragma: no cover - depends on the interpreter
     from backports import zstd  # type: ignore[import-not-found,no-redef]
 
 # The topics of a harness bag; /ground_truth/occluded (std_msgs/Bool per frame) only for synthetic scenarios.
-IMAGE_TOPIC, INFO_TOPIC = topics.IMAGE, topics.CAMERA_INFO
-GT_TOPIC, OCCLUDED_TOPIC = topics.GROUND_TRUTH_BOX, topics.GROUND_TRUTH_OCCLUDED
+# A bag holds fully qualified names: a head's relative names in the root namespace (topics.absolute).
+IMAGE_TOPIC, INFO_TOPIC = topics.absolute(topics.IMAGE), topics.absolute(topics.CAMERA_INFO)
+GT_TOPIC = topics.absolute(topics.GROUND_TRUTH_BOX)
+OCCLUDED_TOPIC = topics.absolute(topics.GROUND_TRUTH_OCCLUDED)
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from swir_tracker_ros.harness.bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OC
 from swir_tracker_ros.harness.metrics import Score, score
 from swir_tracker_ros.types import Box
 
-RECORDED = (topics.TRACK_BOX, topics.TRACK_STATE, topics.PAN_TILT_ERROR)
+RECORDED = tuple(topics.absolute(t) for t in (topics.TRACK_BOX, topics.TRACK_STATE, topics.PAN_TILT_ERROR))
 PLAYED = (IMAGE_TOPIC, INFO_TOPIC, GT_TOPIC, OCCLUDED_TOPIC)
 
 
@@ -123,7 +123,7 @@ def replay(bag: Path | str, out: Path | str, rate: float = 1.0, wait_s: float = 
     recorded = _write_recording(Path(out), received)
     boxes: dict[int, Box | None] = {}
     for topic, _, raw in received:
-        if topic == topics.TRACK_BOX:
+        if topic == topics.absolute(topics.TRACK_BOX):
             m = mb.deserialize(raw, topics.TYPES[topics.TRACK_BOX])
             boxes[msg_ns(m)] = box_from_polygon(m)
     stamps = sorted(gt_stamps)

@@ -43,7 +43,7 @@ MOT_PREFIX = "mot."
 
 
 PARAMS_FILE = ParamsFile(
-    "params/acquisition.yaml", "acquisition",
+    "params/acquisition.yaml", "/**",
     (("", AcquisitionParams, ""),
      ("mot", MotParams, "association and life cycle (MotParams), declared as mot.<name>")),
     "Parameters of the acquisition node (`acquisition`, docs/acquisition.md), every one at its default. "

@@ -13,24 +13,31 @@ from rclpy.node import Node
 from rclpy.validate_full_topic_name import validate_full_topic_name
 
 from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.topics import absolute
 
 PUBLISHERS_KEY = "publishers {}"
 
 
 def input_publishers(node: Node, topics: Iterable[str]) -> dict[str, str]:
-    """Diagnostic values `publishers <topic>`: the publishers of each input topic this node has discovered.
+    """Diagnostic values `publishers <topic>`: the publishers of each input topic this node has discovered,
+    keyed by the fully qualified name the node subscribes (namespace and remappings applied).
 
     The count comes from the node's own participant, so a non-zero count means this process has discovered
     (and, for compatible QoS, matched) a writer of the topic — a supervisor's own view of the graph says
     nothing about whether two other processes have found each other yet.
     """
-    return {PUBLISHERS_KEY.format(t): str(node.count_publishers(t)) for t in topics}
+    out = {}
+    for t in topics:
+        name = node.resolve_topic_name(t)
+        out[PUBLISHERS_KEY.format(name)] = str(node.count_publishers(name))
+    return out
 
 
-def reported_publishers(values: Mapping[str, str], topic: str) -> int:
-    """The `publishers <topic>` count in a status's values; 0 when absent or not a number."""
+def reported_publishers(values: Mapping[str, str], topic: str, namespace: str = "/") -> int:
+    """The `publishers <topic>` count in a status's values (a relative `topic` resolved in `namespace`);
+    0 when absent or not a number."""
     try:
-        return int(values.get(PUBLISHERS_KEY.format(topic), "0"))
+        return int(values.get(PUBLISHERS_KEY.format(absolute(topic, namespace)), "0"))
     except ValueError:
         return 0
 

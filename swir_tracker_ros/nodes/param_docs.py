@@ -84,15 +84,20 @@ def marker(cls: object, prefix: str = "") -> str:
 def replace_table(text: str, cls: object, prefix: str = "") -> str:
     """`text` (a Markdown document) with the table after `marker(cls, prefix)` replaced by the generated
     one; `ValueError` when the marker is missing."""
+    return replace_block(text, marker(cls, prefix), markdown_table(cls, prefix))
+
+
+def replace_block(text: str, mark: str, table: str) -> str:
+    """`text` with the Markdown table right after the line `mark` replaced by `table`; `ValueError` when
+    the marker is missing."""
     lines = text.split("\n")
-    mark = marker(cls, prefix)
     if mark not in lines:
         raise ValueError(f"marker {mark} not found")
     start = lines.index(mark) + 1
     end = start
     while end < len(lines) and lines[end].startswith("|"):
         end += 1
-    return "\n".join([*lines[:start], markdown_table(cls, prefix), *lines[end:]])
+    return "\n".join([*lines[:start], table, *lines[end:]])
 
 
 def _yaml_value(value: object) -> str:

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The tracker node: camera image -> msg_adapters -> Tracker.update -> /track/* (docs/tracker_node.md)."""
+"""The tracker node: camera image -> msg_adapters -> Tracker.update -> track/* (docs/tracker_node.md)."""
 
 from __future__ import annotations
 
@@ -7,24 +7,21 @@ import dataclasses
 import sys
 import time
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.node import Node
-from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState, RegionOfInterest
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 
 from msg_adapters.camera_info import Intrinsics, intrinsics_from_camera_info, intrinsics_from_fov
-from msg_adapters.debug_image import render_debug
+from msg_adapters.compressed import compressed_to_numpy
 from msg_adapters.diagnostics import OK, STALE, WARN, diagnostic_array, status
 from msg_adapters.errors import MessageError
-from msg_adapters.geometry import box_from_roi, box_to_polygon, ego_shift, pan_tilt_error, pan_tilt_to_msg
-from msg_adapters.image import image_to_numpy
+from msg_adapters.geometry import box_from_roi, ego_shift
+from msg_adapters.image import Frame, image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.qos import profile
 from msg_adapters.stamps import header_of, stamp_to_seconds
-from msg_adapters.track_state import track_result_to_msg
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
 from swir_tracker_ros.configs import ConfigurationChoice
@@ -34,20 +31,24 @@ from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
 from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node, signals_deferred, user_arguments
+from swir_tracker_ros.nodes.selection import CatchUp, Code, StoredFrame, Verdict
 from swir_tracker_ros.nodes.tracker_node_params import (
-    FORMAT_CHANGE_FRAMES,
+    FormatWatch,
     FrameStats,
     HeadPoseHistory,
     TrackerNodeParams,
+    fmt_key,
     frame_problem,
 )
+from swir_tracker_ros.nodes.tracker_outputs import ACTIVE, IDLE_RESULT, TrackOutputs
+from swir_tracker_ros.nodes.tracker_selection import MIB, Selector
 from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
 NODE_NAME = "tracker"
 DIAG_NAME = "swir_tracker/tracker_node"
 TRACKER_PREFIX = "tracker."
-ACTIVE = (TrackState.TRACKING, TrackState.OCCLUDED)
+
 
 class TrackerNode(Node):
     """Wraps `Tracker`; owns no algorithm: decode, call the core, publish, keep statistics."""
@@ -70,31 +71,30 @@ class TrackerNode(Node):
         self.last_box: Box | None = None
         self.last_result: TrackResult | None = None
         self.last_stamp = 0.0
-        self.frame_key: tuple | None = None  # (shape, dtype) of the frames being tracked
-        self._new_key: tuple | None = None  # a different format seen while tracking, and how often in a row
-        self._new_key_count = 0
+        self.format = FormatWatch()  # the size and pixel format of the frames being tracked
         self._restart: str | None = None  # why the pending init restarts a running track (never silent)
         self.prev_pose: tuple[float, float] | None = None
         self.window_start = time.monotonic()
         self._warned: dict[str, tuple[float, int]] = {}  # kind -> (time of the last warning, held back)
         p = self.params
-        output, sensor = profile(topics.RELIABLE), profile(topics.SENSOR)
-        self.pub_box = self.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
-        self.pub_error = self.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
-        self.pub_state = self.create_publisher(DiagnosticArray, topics.TRACK_STATE, output)
-        self.pub_debug = self.create_publisher(Image, topics.TRACK_DEBUG_IMAGE, profile(topics.DEBUG_IMAGE))
+        self._untracked = 0.0  # frame periods received while a selection caught up, unseen by the core
+        self.outputs = TrackOutputs(self)
+        guard, output, sensor = self._guard, profile(topics.RELIABLE), profile(topics.SENSOR)
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, output)
-        guard = self._guard
         # a queue of one: the executor always takes the newest frame, never a backlog
-        self.create_subscription(Image, p.image_topic, guard(self._on_image), profile(topics.LATEST))
+        image_type = Image if p.image_transport == "raw" else CompressedImage
+        self.image_input = topics.transport_topic(p.image_topic, p.image_transport)
+        self.create_subscription(image_type, self.image_input, guard(self._on_image), profile(topics.LATEST))
         self.create_subscription(CameraInfo, p.camera_info_topic, guard(self._on_camera_info), sensor)
         self.create_subscription(JointState, p.joint_states_topic, guard(self._on_joint_state), sensor)
         self.create_subscription(RegionOfInterest, topics.TRACK_INIT, guard(self._on_init), output)
         self.create_service(Trigger, topics.TRACK_CANCEL, self._on_cancel)
+        self.selector = Selector(self, self, guard)  # track/select, clicks, recent frames, catch-up
         self.diag_timer = self.create_timer(p.diagnostics_period_s, self._guard(self._publish_diagnostics))
         base = type(self.tracker_params.base).__name__
-        self.get_logger().info(f"tracking {p.image_topic} with configuration {self.choice.configuration} "
-                               f"({base}); init box: {p.init_box or 'none'}")
+        self.get_logger().info(f"tracking {self.resolve_topic_name(self.image_input)} ({p.image_transport}) "
+                               f"with configuration {self.choice.configuration} ({base}); "
+                               f"init box: {p.init_box or 'none'}")
 
     # ------------------------------------------------------------------ callbacks
     def _guard(self, fn):
@@ -119,7 +119,7 @@ class TrackerNode(Node):
         self._warned[kind] = (now, 0)
         self.get_logger().warning(text + (f" ({held} similar since the last warning)" if held else ""))
 
-    def _on_image(self, msg: Image) -> None:
+    def _on_image(self, msg: Image | CompressedImage) -> None:
         t_recv = time.perf_counter()
         self.stats.received += 1
         hdr = header_of(msg)
@@ -128,11 +128,14 @@ class TrackerNode(Node):
             self.stats.stale += 1
             return
         try:
-            frame = image_to_numpy(msg)
+            frame = image_to_numpy(msg) if isinstance(msg, Image) else compressed_to_numpy(msg)
         except MessageError as exc:
             self.stats.malformed += 1
             self._warn("image", f"dropped a malformed image: {exc}")
             return
+        self._on_frame(hdr, stamp, frame, t_recv)
+
+    def _on_frame(self, hdr: Header, stamp: float, frame: Frame, t_recv: float) -> None:
         skipped_before = self.stats.skipped
         self.stats.frame_stamp(stamp)
         # frames since the last processed one (1 + those skipped in between): the core's Kalman prediction
@@ -145,15 +148,21 @@ class TrackerNode(Node):
         if skip:
             self._skip(hdr, skip)
             return
+        depth = (self.params.bit_depth or frame.bit_depth) if pixels.dtype.itemsize == 2 else None
+        self.selector.store(StoredFrame(stamp, pixels, depth, elapsed, hdr))
         intr = self._intrinsics(width, height)
+        if self.selector.busy:  # this frame waits in the history for the selection's catch-up
+            self._untracked += elapsed
+            self.outputs.publish_state(hdr, self._unmeasured(), width, height)
+            return
         shift = self._ego_shift(stamp, intr)
-        hint = {"bit_depth": self.params.bit_depth or frame.bit_depth} if pixels.dtype.itemsize == 2 else {}
         t_core = time.perf_counter()
-        result = self._track(pixels, shift, hint, elapsed)
+        result = self._track(pixels, shift, {} if depth is None else {"bit_depth": depth},
+                             elapsed + self._untracked)
+        self._untracked = 0.0
         core_ms = (time.perf_counter() - t_core) * 1e3
-        self._publish(hdr, result, intr)
-        if self.pub_debug.get_subscription_count() > 0:
-            self.pub_debug.publish(render_debug(pixels, result, hdr))
+        self.outputs.publish(hdr, result, intr)
+        self.outputs.publish_debug(pixels, result, hdr, self.params.debug_jpeg_quality)
         now = time.perf_counter()
         self.stats.processed += 1
         self.stats.latency_ms.append((now - t_recv) * 1e3)
@@ -178,14 +187,17 @@ class TrackerNode(Node):
 
     def _on_init(self, msg: RegionOfInterest) -> None:
         try:
-            self.pending_init = box_from_roi(msg)
+            box = box_from_roi(msg)
         except MessageError as exc:
             self._warn("init", f"ignoring {topics.TRACK_INIT}: {exc}")
             return
-        self.get_logger().info(f"target selected: {self.pending_init.as_tuple()} (starts on the next frame)")
+        self.selector.end(Verdict(Code.SUPERSEDED, f"superseded by {topics.TRACK_INIT}"))
+        self.pending_init = box
+        self.get_logger().info(f"target selected: {box.as_tuple()} (starts on the next frame)")
 
     def _on_cancel(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         was = self.tracker.state.value
+        self.selector.end(Verdict(Code.SUPERSEDED, f"cancelled on {topics.TRACK_CANCEL}"))
         self.tracker.reset()
         self.pending_init = None
         self._restart = None
@@ -202,10 +214,12 @@ class TrackerNode(Node):
             self.destroy_timer(self.diag_timer)
             self.diag_timer = self.create_timer(params.diagnostics_period_s,
                                                 self._guard(self._publish_diagnostics))
+        self.selector.set_bounds(params)
         self.params = params
 
     def _on_tracker_params(self, params: TrackerParams) -> None:
         """New core parameters: a fresh core, re-initialised on the last box at the next frame."""
+        self.selector.end(Verdict(Code.SUPERSEDED, "superseded by a change of the tracker parameters"))
         self.tracker_params = params
         self.tracker = Tracker(params)
         if self.pending_init is None and self.last_box is not None and self.last_result is not None \
@@ -213,6 +227,37 @@ class TrackerNode(Node):
             self.pending_init = self.last_box
             self._restart = "the parameter change"
         self.get_logger().info("tracker parameters changed; core restarted")
+
+    # ------------------------------------------------------------------ stamped selection (Selector)
+    @property
+    def frame_size(self) -> tuple[int, int]:
+        """(width, height) of the frames being tracked; (0, 0) before the first."""
+        shape = self.format.key[0] if self.format.key else (0, 0)
+        return int(shape[1]), int(shape[0])
+
+    def adopt(self, job: CatchUp) -> None:
+        """A selection has caught up: its core replaces the current one; its newest result is published."""
+        self.tracker, self.last_result, self.last_box = job.tracker, job.result, job.box
+        if job.result is not None and job.result.state in ACTIVE:
+            self.last_box = job.result.box
+        self.pending_init, self._restart, self._untracked = None, None, 0.0
+        self.prev_pose = self.poses.at(job.frame.stamp)
+        height, width = job.frame.pixels.shape[:2]
+        self.outputs.publish(job.frame.msg_header, job.result, self._intrinsics(width, height))
+
+    def shift_between(self, t0: float, t1: float, width: int, height: int) -> tuple[float, float]:
+        """Image shift caused by the head between two frame stamps (poses known now, at catch-up time)."""
+        p0, p1 = self.poses.at(t0), self.poses.at(t1)
+        if not self.params.ego_motion_compensation or p0 is None or p1 is None:
+            return (0.0, 0.0)
+        return ego_shift(p1[0] - p0[0], p1[1] - p0[1], self._intrinsics(width, height))
+
+    def _unmeasured(self) -> TrackResult:
+        """The current state without a measurement: what a frame that the core did not see reports."""
+        last = self.last_result
+        if last is None or self.tracker.state is TrackState.IDLE:
+            return IDLE_RESULT
+        return dataclasses.replace(last, measured=False, model_updated=False, search_windows=())
 
     # ------------------------------------------------------------------ per-frame pieces
     def _is_stale(self, stamp: float) -> bool:
@@ -226,28 +271,18 @@ class TrackerNode(Node):
         return max_age > 0 and stamp > 0 and self.get_clock().now().nanoseconds * 1e-9 - stamp > max_age
 
     def _check_format(self, pixels) -> str | None:
-        """Follow the frame size / pixel format; a reason to skip this frame, or None to track it.
+        """Follow the frame size / pixel format (`FormatWatch`); a reason to skip this frame, or None.
 
-        Without a track or a pending selection a new format is taken at once. Otherwise a frame of another
-        format is skipped until FORMAT_CHANGE_FRAMES of that format arrive in a row; then the core restarts
-        on the last (or the pending) box scaled to the new size. One odd frame (a driver glitch) therefore
-        never ends a track, and a genuine, persistent change re-initialises it.
+        A persistent change restarts the core on the last (or the pending) box scaled to the new size.
         """
-        key = (pixels.shape, pixels.dtype.str)
-        old = self.frame_key
-        if old is None or old == key:
-            self.frame_key, self._new_key, self._new_key_count = key, None, 0
-            return None
         active = self.tracker.state in ACTIVE and self.last_box is not None
-        if active or self.pending_init is not None:  # a track, or a selection made in the old format
-            self._new_key_count = self._new_key_count + 1 if key == self._new_key else 1
-            self._new_key = key
-            if self._new_key_count < FORMAT_CHANGE_FRAMES:
-                return (f"format {_fmt_key(key)} differs from the tracked {_fmt_key(old)} "
-                        f"({self._new_key_count} of {FORMAT_CHANGE_FRAMES} in a row before re-initialising)")
-        (oh, ow), (nh, nw) = old[0][:2], key[0][:2]
-        self.frame_key, self._new_key, self._new_key_count = key, None, 0
+        skip, old = self.format.check(pixels, holding=active or self.pending_init is not None)
+        if old is None:
+            return skip
+        (oh, ow), (nh, nw) = old[0][:2], pixels.shape[:2]
         self.prev_pose = None
+        self.selector.history.clear()  # a selection names a frame of the new format
+        self.selector.end(Verdict(Code.TRACKER_FAILED, "the image format changed while catching up"))
         if self.pending_init is not None:
             self.pending_init = _scale_box(self.pending_init, nw / ow, nh / oh)
         elif active:
@@ -255,21 +290,17 @@ class TrackerNode(Node):
             self._restart = "the format change"
         self.tracker.reset()
         if self.pending_init is not None:  # nothing tracked and nothing selected: nothing to say
-            self.get_logger().warning(f"image format changed from {_fmt_key(old)} to {_fmt_key(key)}; "
-                                      f"tracker re-initialised on {_fmt_box(self.pending_init)}")
+            self.get_logger().warning(f"image format changed from {fmt_key(old)} to "
+                                      f"{fmt_key(self.format.key)}; tracker re-initialised on "
+                                      f"{_fmt_box(self.pending_init)}")
         return None
 
     def _skip(self, header: Header, reason: str) -> None:
         """A decoded frame the core is not given: counted, warned about (throttled), and answered on
-        /track/state with the unchanged track state (measured false), never a silent stop."""
+        track/state with the unchanged track state (measured false), never a silent stop."""
         self.stats.unusable += 1
         self._warn("unusable", f"skipped a frame: {reason}")
-        last = self.last_result
-        if last is None or self.tracker.state is TrackState.IDLE:
-            result = TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
-        else:
-            result = dataclasses.replace(last, measured=False, model_updated=False, search_windows=())
-        self.pub_state.publish(track_result_to_msg(result, header))
+        self.outputs.publish_state(header, self._unmeasured(), *self.frame_size)
 
     def _intrinsics(self, width: int, height: int) -> Intrinsics:
         if self.params.use_camera_info and self.camera_intr is not None:
@@ -312,23 +343,13 @@ class TrackerNode(Node):
             self.last_box = result.box
         return result
 
-    def _publish(self, header: Header, result: TrackResult | None, intr: Intrinsics) -> None:
-        if result is None:
-            result = TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
-        active = result.state in ACTIVE and result.box.is_finite()
-        self.pub_box.publish(box_to_polygon(result.box if active else None, header))
-        if active:
-            pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
-            self.pub_error.publish(pan_tilt_to_msg(pan, tilt, header))
-        self.pub_state.publish(track_result_to_msg(result, header))
-
     def _publish_diagnostics(self) -> None:
         now = time.monotonic()
         values, trouble = self.stats.report(now - self.window_start)
         self.window_start = now
         received = values["window_received"]
         if received == 0:
-            level, text = STALE, f"no images on {self.params.image_topic}"
+            level, text = STALE, f"no images on {self.resolve_topic_name(self.image_input)}"
         elif trouble:
             level, text = WARN, "frames dropped or callback errors in the last period"
         else:
@@ -336,19 +357,18 @@ class TrackerNode(Node):
         state = self.last_result.state.value if self.last_result else TrackState.IDLE.value
         values = {"state": state, "intrinsics": "camera_info" if self.params.use_camera_info and
                   self.camera_intr is not None else "fov", **values,
-                  **input_publishers(self, (self.params.image_topic, self.params.camera_info_topic,
+                  "selecting": "true" if self.selector.busy else "false",
+                  "history_frames": len(self.selector.history),
+                  "history_mb": self.selector.history.nbytes / MIB,
+                  **input_publishers(self, (self.image_input, self.params.camera_info_topic,
                                             self.params.joint_states_topic))}
         header = Header(stamp=self.get_clock().now().to_msg())
-        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values, NODE_NAME)]))
+        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values,
+                                                               self.get_fully_qualified_name())]))
 
 
 def _scale_box(box: Box, sx: float, sy: float) -> Box:
     return Box(box.x * sx, box.y * sy, box.w * sx, box.h * sy)
-
-
-def _fmt_key(key: tuple) -> str:
-    shape, dtype = key
-    return "x".join(map(str, shape)) + f" {np.dtype(dtype).name}"
 
 
 def _fmt_box(box: Box) -> str:

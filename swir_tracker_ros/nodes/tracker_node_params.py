@@ -14,13 +14,20 @@ from swir_tracker_ros import topics
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param, validate_params
 
+CLICK_MSGS = ("point", "point_stamped", "off")
+
 
 @dataclass
 class TrackerNodeParams:
     """Node-only parameters (the tracking core's own parameters are bound under `tracker.`)."""
 
     image_topic: str = param(
-        topics.IMAGE, "Input sensor_msgs/Image topic (sensor-data QoS, depth 1).", read_only=True)
+        topics.IMAGE, "Input image topic, the base name of image_transport (a relative name resolves in the "
+        "node's namespace; sensor-data QoS, depth 1).", read_only=True)
+    image_transport: str = param(
+        "raw", "How images arrive (image_transport's names): raw (sensor_msgs/Image on image_topic) or "
+        "compressed (sensor_msgs/CompressedImage, JPEG or PNG, on image_topic/compressed).",
+        choices=topics.TRANSPORTS, read_only=True)
     camera_info_topic: str = param(
         topics.CAMERA_INFO,
         "Optional sensor_msgs/CameraInfo topic; its K gives the focal lengths.", read_only=True)
@@ -35,6 +42,23 @@ class TrackerNodeParams:
         0.0, "Vertical field of view (deg) for the fallback; 0 means square pixels (fy = fx).", 0.0, 179.0)
     init_box: list[float] = param(
         [], "Box x, y, w, h (full-resolution pixels) that starts tracking on the next frame; [] = none.")
+    click_msg: str = param(
+        "point", "Clicks on image_topic_mouse_left and track/debug_image_mouse_left select the target: point "
+        "(geometry_msgs/Point, what rqt_image_view publishes; the newest frame), point_stamped "
+        "(geometry_msgs/PointStamped; the frame with its stamp) or off.", choices=CLICK_MSGS, read_only=True)
+    click_box_size: float = param(
+        32.0, "Side (pixels) of the box a click starts when the object under it does not stand out; also "
+        "the scale of the search for one.", 4.0, 1024.0)
+    select_min_size: float = param(
+        4.0, "A selected box smaller than this (pixels) on a side is rejected (too small).", 1.0, 1000.0)
+    select_stamp_tolerance_s: float = param(
+        0.1, "A selection's stamp names the stored frame nearest to it within this (s); 0 stamp: the newest "
+        "frame.", 0.0, 10.0)
+    history_max_age_s: float = param(
+        2.0, "Recent frames kept for stamped selection (s): a selection older than this is rejected (stamp "
+        "too old); 0 keeps only the newest frame.", 0.0, 60.0)
+    history_max_mb: float = param(
+        128.0, "Memory bound of the kept frames (MiB); the oldest go first.", 0.0, 65536.0)
     bit_depth: int = param(
         0, "Significant bits of 16-bit images (10, 12, 14); 0 = the full 16-bit container.", 0, 16)
     ego_motion_compensation: bool = param(
@@ -42,6 +66,8 @@ class TrackerNodeParams:
     max_frame_age_s: float = param(
         0.0,
         "Drop frames whose header stamp is older than this against the node clock; 0 = no limit.", 0.0, 60.0)
+    debug_jpeg_quality: int = param(
+        80, "JPEG quality of track/debug_image/compressed (published only while subscribed).", 1, 100)
     diagnostics_period_s: float = param(
         1.0, "Period of the /diagnostics report (rate, latency, drops).", 0.1, 60.0)
     warn_throttle_s: float = param(
@@ -77,6 +103,40 @@ def frame_problem(pixels: np.ndarray) -> str | None:
     if pixels.dtype.kind == "f" and not np.isfinite(pixels).all():
         return f"{height}x{width} {pixels.dtype} frame has NaN or infinite pixels"
     return None
+
+
+def fmt_key(key: tuple) -> str:
+    """`240x320 uint16` for a (shape, dtype string) format key."""
+    shape, dtype = key
+    return "x".join(map(str, shape)) + f" {np.dtype(dtype).name}"
+
+
+class FormatWatch:
+    """The (shape, dtype) of the frames being tracked. A frame of another format is taken at once while
+    nothing is held (no track, no pending selection); otherwise frames of it are skipped until
+    FORMAT_CHANGE_FRAMES arrive in a row, so that one odd frame (a driver glitch) never ends a track and a
+    genuine, persistent change re-initialises it."""
+
+    def __init__(self) -> None:
+        self.key: tuple | None = None
+        self._new: tuple | None = None  # a different format seen while holding, and how often in a row
+        self._count = 0
+
+    def check(self, pixels: np.ndarray, holding: bool) -> tuple[str | None, tuple | None]:
+        """(why this frame is skipped, or None; the previous format when this frame changes it, or None)."""
+        key = (pixels.shape, pixels.dtype.str)
+        old = self.key
+        if old is None or old == key:
+            self.key, self._new, self._count = key, None, 0
+            return None, None
+        if holding:
+            self._count = self._count + 1 if key == self._new else 1
+            self._new = key
+            if self._count < FORMAT_CHANGE_FRAMES:
+                return (f"format {fmt_key(key)} differs from the tracked {fmt_key(old)} ({self._count} of "
+                        f"{FORMAT_CHANGE_FRAMES} in a row before re-initialising)"), None
+        self.key, self._new, self._count = key, None, 0
+        return None, old
 
 
 class HeadPoseHistory:

@@ -18,7 +18,7 @@ from std_srvs.srv import Trigger
 from msg_adapters import diagnostics
 from msg_adapters.camera_info import Intrinsics, camera_info_from_intrinsics
 from msg_adapters.errors import MessageError
-from msg_adapters.geometry import box_to_polygon
+from msg_adapters.geometry import box_to_polygon, pixel_header
 from msg_adapters.ground_truth import ground_truth_state_msg, scene_start_reply
 from msg_adapters.image import numpy_to_image
 from msg_adapters.joint_state import joint_state_to_sample
@@ -197,7 +197,7 @@ class SceneCameraNode(Node):
         self.image_pub.publish(numpy_to_image(frame, hdr, "mono8" if self.p.bits == 8 else "mono16"))
         self.info_pub.publish(camera_info_msg(view, hdr))
         in_view = target is not None and target.in_view
-        self.gt_pub.publish(box_to_polygon(target.box if in_view else None, hdr))
+        self.gt_pub.publish(box_to_polygon(target.box if in_view else None, pixel_header(hdr)))
         self.gt_state_pub.publish(ground_truth_state_msg(
             hdr, ground_truth_values(t, target, view, self.clock.running), hardware_id="scene_camera"))
         self.frames += 1

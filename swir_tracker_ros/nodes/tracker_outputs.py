@@ -1,0 +1,78 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The tracker node's outputs: one publisher per topic and what one frame publishes on each.
+
+Every output of a frame carries that image's stamp; `track/box` a pixel frame_id (`msg_adapters.geometry.
+pixel_frame_id`), the others the image's header. A new per-frame output (e.g. a target angular rate from
+`TrackResult.velocity`) is one more publisher here and one more line in `publish`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PolygonStamped, Vector3Stamped
+from rclpy.node import Node
+from sensor_msgs.msg import CompressedImage, Image
+from std_msgs.msg import Header
+from visualization_msgs.msg import ImageMarker
+
+from msg_adapters.camera_info import Intrinsics
+from msg_adapters.debug_image import render_debug, render_debug_compressed
+from msg_adapters.geometry import box_to_polygon, pan_tilt_error, pan_tilt_to_msg, pixel_header
+from msg_adapters.image_marker import track_markers
+from msg_adapters.qos import profile
+from msg_adapters.track_state import track_result_to_msg, typed_state_msg
+from swir_tracker_interfaces.msg import TrackState as TrackStateMsg
+from swir_tracker_ros import topics
+from swir_tracker_ros.types import Box, TrackResult, TrackState
+
+ACTIVE = (TrackState.TRACKING, TrackState.OCCLUDED)
+IDLE_RESULT = TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
+
+
+class TrackOutputs:
+    """Publishers of `track/*` and the per-frame publishing; counts frames since the target was tracked."""
+
+    def __init__(self, node: Node) -> None:
+        output, debug = profile(topics.RELIABLE), profile(topics.DEBUG_IMAGE)
+        self.box = node.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
+        self.error = node.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
+        self.state = node.create_publisher(DiagnosticArray, topics.TRACK_STATE, output)
+        self.typed = node.create_publisher(TrackStateMsg, topics.TRACK_STATE_TYPED, output)
+        self.image_markers = node.create_publisher(ImageMarker, topics.TRACK_MARKERS, output)
+        self.debug = node.create_publisher(Image, topics.TRACK_DEBUG_IMAGE, debug)
+        self.debug_compressed = node.create_publisher(
+            CompressedImage, topics.transport_topic(topics.TRACK_DEBUG_IMAGE, "compressed"), debug)
+        self.frames_occluded = 0
+
+    def publish(self, header: Header, result: TrackResult | None, intr: Intrinsics) -> None:
+        """A processed frame: box (empty polygon when absent), pan/tilt error while tracking or occluded,
+        the state (both forms) and the image markers."""
+        result = IDLE_RESULT if result is None else result
+        active = result.state in ACTIVE and result.box.is_finite()
+        self.box.publish(box_to_polygon(result.box if active else None, pixel_header(header)))
+        if active:
+            pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
+            self.error.publish(pan_tilt_to_msg(pan, tilt, header))
+        self.publish_state(header, result, intr.width, intr.height)
+        for marker in track_markers(result, header):
+            self.image_markers.publish(marker)
+
+    def publish_state(self, header: Header, result: TrackResult, width: int, height: int) -> None:
+        """`track/state` and `track/state_typed` alone (a frame answered without a measurement)."""
+        if result.state is TrackState.TRACKING and result.measured:
+            self.frames_occluded = 0
+        elif result.state in ACTIVE:
+            self.frames_occluded += 1
+        else:
+            self.frames_occluded = 0
+        self.state.publish(track_result_to_msg(result, header))
+        self.typed.publish(typed_state_msg(result, header, self.frames_occluded, width, height))
+
+    def publish_debug(self, pixels: np.ndarray, result: TrackResult | None, header: Header,
+                      quality: int) -> None:
+        """The debug picture, raw and JPEG, each only while someone subscribes."""
+        if self.debug.get_subscription_count() > 0:
+            self.debug.publish(render_debug(pixels, result, header))
+        if self.debug_compressed.get_subscription_count() > 0:
+            self.debug_compressed.publish(render_debug_compressed(pixels, result, header, quality))
