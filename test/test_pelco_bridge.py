@@ -146,8 +146,8 @@ def test_feedback_pose_soft_limit_and_shutdown() -> None:
     head = rig.link.head
     assert pose.tilt == pytest.approx(math.radians(head.tilt.angle), abs=math.radians(2.0))
     assert 8.0 < head.tilt.angle < 10.2 and head.tilt.velocity == 0.0  # slowed down, stopped at the limit
-    assert rig.bridge.replies > 10 and rig.bridge.decoder.checksum_errors == 0
-    assert rig.bridge.shutdown()
+    assert rig.bridge.feedback.replies > 10 and rig.bridge.decoder.checksum_errors == 0
+    assert rig.bridge.shutdown() == "written"
     assert rig.link.written[-1].to_bytes() == codec.stop(1) and not rig.link.connected
 
 
