@@ -23,6 +23,7 @@ from msg_adapters.geometry import box_from_roi, box_to_polygon, ego_shift, pan_t
 from msg_adapters.image import image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.qos import profile
+from msg_adapters.rate import head_rate, target_rate
 from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.track_state import track_result_to_msg
 from msg_adapters.trigger import trigger_reply
@@ -79,6 +80,7 @@ class TrackerNode(Node):
         output, sensor = profile(topics.RELIABLE), profile(topics.SENSOR)
         self.pub_box = self.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
         self.pub_error = self.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
+        self.pub_rate = self.create_publisher(Vector3Stamped, topics.TARGET_RATE, output)
         self.pub_state = self.create_publisher(DiagnosticArray, topics.TRACK_STATE, output)
         self.pub_debug = self.create_publisher(Image, topics.TRACK_DEBUG_IMAGE, profile(topics.DEBUG_IMAGE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, output)
@@ -317,6 +319,12 @@ class TrackerNode(Node):
         if active:
             pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
             self.pub_error.publish(pan_tilt_to_msg(pan, tilt, header))
+            period, stamp = self.stats.period(), stamp_to_seconds(header.stamp)
+            ego = self.params.ego_motion_compensation
+            head = (0.0, 0.0) if ego else head_rate(self.poses.at, stamp, period)
+            if period > 0 and head is not None:  # track/target_rate: the error's layout and header
+                rate = target_rate(result.box.cx, result.box.cy, result.velocity, period, intr, head)
+                self.pub_rate.publish(pan_tilt_to_msg(*rate, header))
         self.pub_state.publish(track_result_to_msg(result, header))
 
     def _publish_diagnostics(self) -> None:
