@@ -47,19 +47,28 @@ def test_follower_feeds_a_fresh_rate_forward_and_drops_a_stale_one() -> None:
     assert f.demand(10.04, (0.0, 0.0)) == "tracker lost"
 
 
-def test_occlusion_coasts_on_the_predicted_rate_for_a_bounded_time() -> None:
-    f = Follower(replace(P, coast_time=1.0, coast_decay=1.0, occluded_gain=0.5))
-    f.on_state(TrackState.OCCLUDED, 0.0)
-    f.on_error(0.0, 0.0, now=0.5)
-    f.on_rate(0.02, 0.0, now=0.5)
-    assert f.demand(0.5, (0.0, 0.0)).feed_forward[0] == pytest.approx(0.02)
-    f.on_error(0.0, 0.0, now=1.5)
-    f.on_rate(0.02, 0.0, now=1.5)
-    assert f.demand(1.5, (0.0, 0.0)).feed_forward[0] == pytest.approx(0.01)
-    f.on_error(0.0, 0.0, now=2.5)
-    f.on_rate(0.02, 0.0, now=2.5)
-    d = f.demand(2.5, (0.0, 0.0))
-    assert d.feed_forward == (0.0, 0.0) and d.gain == 0.5
+def test_occlusion_coasts_on_the_last_measured_rate_for_a_bounded_time() -> None:
+    """While occluded the head keeps the rate the target had while last tracked (the median of the last
+    half second: not the sag as it slid behind the occluder, nor the tracker's own slowing prediction),
+    for coast_time, then fades it out; the predicted error steers with occluded_gain."""
+    f = Follower(replace(P, coast_time=1.0, coast_decay=1.0, occluded_gain=0.0))
+    f.on_state(TrackState.TRACKING, -0.4)
+    for k, rate in enumerate([0.03, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02, 0.012, 0.008]):
+        f.on_error(0.0, 0.0, now=-0.4 + 0.05 * k)
+        f.on_rate(rate, 0.0, now=-0.4 + 0.05 * k)
+    f.on_state(TrackState.OCCLUDED, 0.1)
+    for t, weight in ((0.6, 1.0), (1.6, 0.5), (2.6, 0.0)):
+        f.on_error(-0.3, 0.0, now=t)  # the prediction has fallen behind the head
+        f.on_rate(0.005, 0.0, now=t)  # and slows down
+        d = f.demand(t, (0.02, 0.0))
+        assert d.feed_forward[0] == pytest.approx(0.02 * weight) and d.gain == 0.0, t
+    f.on_state(TrackState.TRACKING, 2.7)
+    f.on_rate(0.015, 0.0, now=2.7)
+    assert f.demand(2.7, (0.0, 0.0)).feed_forward[0] == pytest.approx(0.015)  # seen again: its own rate
+    f.reset()
+    f.on_state(TrackState.OCCLUDED, 3.0)
+    f.on_error(0.0, 0.0, now=3.0)
+    assert f.demand(3.0, (0.0, 0.0)).feed_forward == (0.0, 0.0)  # no rate measured before: no coasting
 
 
 def test_controller_follows_the_feed_forward_inside_the_deadband_and_adds_it_outside() -> None:

@@ -204,7 +204,8 @@ def stop_turn_events(t: np.ndarray, direction: np.ndarray) -> list[tuple[float, 
 
     `direction` is the target's true angle (deg) over time `t`; its rate is a central difference over
     +-0.1 s. A motion is a run of at least MIN_RUN_S with |rate| > MOVING_DEG_S in one direction; it ends
-    in a stop (the rate falls below that) or a turn (the rate changes sign at once).
+    in a stop (the rate falls below that) or a turn (the rate changes sign at once). The last 0.1 s, where
+    the difference runs off the data, ends nothing.
     """
     if len(t) < 3:
         return []
@@ -214,7 +215,7 @@ def stop_turn_events(t: np.ndarray, direction: np.ndarray) -> list[tuple[float, 
     for i in range(1, len(t)):
         if sign[i] == sign[start]:
             continue
-        if sign[start] != 0 and t[i - 1] - t[start] >= MIN_RUN_S:
+        if sign[start] != 0 and t[i - 1] - t[start] >= MIN_RUN_S and t[i] < t[-1] - 0.1:
             moving_again = np.flatnonzero(sign[i:] != 0)
             t_next = float(t[i + moving_again[0]]) if moving_again.size else float(t[-1])
             events.append((float(t[i]), int(sign[start]), "stop" if sign[i] == 0 else "turn", t_next))

@@ -319,7 +319,7 @@ class TrackerNode(Node):
         if active:
             pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
             self.pub_error.publish(pan_tilt_to_msg(pan, tilt, header))
-            period, stamp = self.stats.period(), stamp_to_seconds(header.stamp)
+            period, stamp = self.stats.period(50.0), stamp_to_seconds(header.stamp)
             ego = self.params.ego_motion_compensation
             head = (0.0, 0.0) if ego else head_rate(self.poses.at, stamp, period)
             if period > 0 and head is not None:  # track/target_rate: the error's layout and header

@@ -153,9 +153,9 @@ class FrameStats:
                 self._periods.append(dt)
         self._last_stamp = stamp
 
-    def period(self) -> float:
-        """The source's frame period (s): 10th percentile of the recent intervals; 0 until 5 are known."""
-        return float(np.percentile(self._periods, 10)) if len(self._periods) >= 5 else 0.0
+    def period(self, q: float = 10.0) -> float:
+        """The source's frame period (s): q-th percentile of the recent intervals; 0 until 5 are known."""
+        return float(np.percentile(self._periods, q)) if len(self._periods) >= 5 else 0.0
 
     def report(self, window_s: float) -> tuple[dict[str, object], bool]:
         """(values, trouble) for the window just ended; trouble means drops or errors happened in it."""

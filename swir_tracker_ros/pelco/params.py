@@ -36,7 +36,10 @@ class PositionerParams:
     watchdog_timeout: float = param(
         0.5, "stop when no /track/pan_tilt_error arrived for this long, s", 0.05, 10.0
     )
-    occluded_gain: float = param(0.5, "gain factor while the tracker reports 'occluded' (0 = stop)", 0.0, 1.0)
+    occluded_gain: float = param(
+        0.0, "P/PI gain factor on the tracker's predicted error while it reports 'occluded'; 0: the head "
+        "coasts on the target's last measured rate alone (coast_time, coast_decay)", 0.0, 1.0
+    )
     feedback_rate: float = param(10.0, "pan/tilt position query rate, Hz (0 = never query)", 0.0, 50.0)
     reply_timeout: float = param(0.25, "give up waiting for a query reply after this long, s", 0.01, 5.0)
     feedback_timeout: float = param(
@@ -46,10 +49,14 @@ class PositionerParams:
     require_feedback: bool = param(False, "refuse to move while the position is unknown")
     frame_id: str = param("", "header.frame_id of the JointState messages")
     # control law: a P/PI loop on the angular error
-    kp: float = param(1.0, "proportional gain, rad/s per rad of error", 0.0, 100.0)
+    kp: float = param(
+        2.0, "proportional gain on what the feed-forward leaves, rad/s per rad of error", 0.0, 100.0
+    )
     ki: float = param(0.0, "integral gain, rad/s per rad*s (0 = P only)", 0.0, 100.0)
     integral_limit: float = param(0.1, "bound of the integral term's contribution, rad/s", 0.0, 10.0)
-    deadband: float = param(0.005, "stop when |error| is below this, rad", 0.0, 0.5)
+    deadband: float = param(
+        0.0005, "no P/PI correction when |error| is below this (the feed-forward still runs), rad", 0.0, 0.5
+    )
     min_speed_byte: int = param(1, "slowest speed byte used outside the deadband", 1, 63)
     max_speed_byte: int = param(63, "fastest speed byte (0x3F)", 1, 63)
     allow_turbo: bool = param(False, "use pan turbo (0xFF) when the demand is past the table's top speed")
@@ -111,8 +118,8 @@ class PositionerParams:
         "rate), s; 0 = off", 0.0, 1.0,
     )
     coast_time: float = param(
-        1.0, "while the tracker reports 'occluded', keep feeding its predicted rate forward this long, s",
-        0.0, 10.0,
+        1.0, "while the tracker reports 'occluded', keep feeding the target's last measured rate forward "
+        "this long, s", 0.0, 10.0,
     )
     coast_decay: float = param(1.0, "then fade the feed-forward out over this long, s", 0.0, 10.0)
     # manual control (positioner/jog, positioner/move, presets, zoom)
