@@ -10,7 +10,7 @@ import pytest
 from test_pelco_bridge import Rig
 
 from swir_tracker_ros.pelco.controller import PanTiltController
-from swir_tracker_ros.pelco.follow import Demand, Follower, carried_error, coast_factor
+from swir_tracker_ros.pelco.follow import Demand, Follower, carried_error, coast_factor, lead_factor
 from swir_tracker_ros.pelco.params import PositionerParams
 from swir_tracker_ros.pelco.speed_table import SpeedTable
 from swir_tracker_ros.types import TrackState
@@ -34,12 +34,12 @@ def test_carried_error_moves_the_error_on_by_the_rate_difference_over_its_age() 
 def test_follower_feeds_a_fresh_rate_forward_and_drops_a_stale_one() -> None:
     f = Follower(P)
     assert f.demand(0.0, (0.0, 0.0)).startswith("watchdog")
-    f.on_error(0.01, -0.002, now=10.0, age=0.08)
+    f.on_error(0.01, 0.002, now=10.0, age=0.08)  # the head lags the target: its rate is trusted in full
     f.on_rate(0.014, 0.001, now=10.0, age=0.08)
     d = f.demand(10.02, (0.014, 0.0))
     assert isinstance(d, Demand) and d.feed_forward == (0.014, 0.001) and f.feed_forward_on
     assert d.error_age == pytest.approx(0.10)
-    assert d.pan_error == pytest.approx(0.01) and d.tilt_error == pytest.approx(-0.002 + 0.001 * 0.10)
+    assert d.pan_error == pytest.approx(0.01) and d.tilt_error == pytest.approx(0.002 + 0.001 * 0.10)
     f.on_rate(0.014, 0.001, now=10.0, age=P.max_input_age + 0.01)  # the rate's frame is too old
     d = f.demand(10.02, (0.0, 0.0))
     assert d.feed_forward == (0.0, 0.0) and not f.feed_forward_on and d.pan_error == 0.01
@@ -63,6 +63,7 @@ def test_occlusion_coasts_on_the_last_measured_rate_for_a_bounded_time() -> None
         d = f.demand(t, (0.02, 0.0))
         assert d.feed_forward[0] == pytest.approx(0.02 * weight) and d.gain == 0.0, t
     f.on_state(TrackState.TRACKING, 2.7)
+    f.on_error(0.0, 0.0, now=2.7)
     f.on_rate(0.015, 0.0, now=2.7)
     assert f.demand(2.7, (0.0, 0.0)).feed_forward[0] == pytest.approx(0.015)  # seen again: its own rate
     f.reset()
@@ -106,3 +107,38 @@ def test_feed_forward_removes_the_lag_of_a_proportional_loop_on_a_ramp() -> None
     without, with_ff = _ramp_lag(0.0), _ramp_lag(1.0)
     assert without == pytest.approx(math.radians(1.0) / 1.0, rel=0.25)  # rate / kp: the P loop's lag
     assert with_ff < 0.25 * without
+
+
+def test_lead_factor_trusts_the_rate_while_the_head_lags_and_fades_it_as_the_head_leads() -> None:
+    assert lead_factor(0.01, 0.02, 0.005) == 1.0 and lead_factor(0.0, 0.02, 0.005) == 1.0  # lagging / on it
+    assert lead_factor(-0.0025, 0.02, 0.005) == pytest.approx(0.5)  # ahead of a target moving +
+    assert lead_factor(0.0025, -0.02, 0.005) == pytest.approx(0.5)  # ahead of a target moving -
+    assert lead_factor(-0.01, 0.02, 0.005) == 0.0 and lead_factor(-0.01, 0.02, 0.0) == 1.0  # 0: off
+
+
+def _overshoot_at_a_stop(lead_limit: float) -> float:
+    """How far (rad) the head runs past a target that walks at 1.5 deg/s for 6 s and stops, on the
+    fake-clock rig; the rate reaches the bridge through a first-order lag of 0.5 s (a Kalman velocity
+    follows a stop over several frames) and the error 0.04 s late."""
+    rig = Rig(lead_limit=lead_limit, max_accel=0.5)
+    true_rate, measured, stop_at = math.radians(1.5), 0.0, 6.0
+    history: list[tuple[float, float]] = []
+    past = 0.0
+    while rig.t < 9.0:
+        head = math.radians(rig.link.head.pan.angle)
+        target = true_rate * min(rig.t, stop_at)
+        rate = true_rate if rig.t < stop_at else 0.0
+        measured += (rate - measured) * 0.04 / 0.5
+        history.append((rig.t, target - head))
+        seen = [e for t, e in history if t <= rig.t - 0.04]
+        if seen:
+            rig.bridge.on_error(seen[-1], 0.0, now=rig.t, age=0.04)
+            rig.bridge.on_rate(measured, 0.0, now=rig.t, age=0.04)
+        rig.run(0.04)
+        if rig.t > stop_at:
+            past = max(past, head - target)
+    return past
+
+
+def test_fading_the_rate_as_the_head_leads_cuts_the_overshoot_when_the_target_stops() -> None:
+    assert _overshoot_at_a_stop(0.003) < 0.7 * _overshoot_at_a_stop(0.0)

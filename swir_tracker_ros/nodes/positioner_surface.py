@@ -145,20 +145,19 @@ class HeadSurface:
 
     # -- inputs ---------------------------------------------------------------------------------------
     def _on_error(self, msg: Vector3Stamped) -> None:
-        try:
-            pan, tilt, stamp = pan_tilt_error_from_msg(msg)
-        except MessageError as exc:
-            return self._bad(topics.PAN_TILT_ERROR, exc)
-        if (bridge := self._running()) is not None:
-            bridge.on_error(pan, tilt, age=self._age(stamp))
+        self._pan_tilt_input(msg, pan_tilt_error_from_msg, topics.PAN_TILT_ERROR, PositionerBridge.on_error)
 
     def _on_rate(self, msg: Vector3Stamped) -> None:
+        self._pan_tilt_input(msg, target_rate_from_msg, topics.TARGET_RATE, PositionerBridge.on_rate)
+
+    def _pan_tilt_input(self, msg: Vector3Stamped, read: Callable, topic: str, deliver: Callable) -> None:
+        """Read (pan, tilt, stamp) with `read` and hand it to the running bridge with its age."""
         try:
-            pan, tilt, stamp = target_rate_from_msg(msg)
+            pan, tilt, stamp = read(msg)
         except MessageError as exc:
-            return self._bad(topics.TARGET_RATE, exc)
+            return self._bad(topic, exc)
         if (bridge := self._running()) is not None:
-            bridge.on_rate(pan, tilt, age=self._age(stamp))
+            deliver(bridge, pan, tilt, age=self._age(stamp))
 
     def _on_state(self, msg: DiagnosticArray) -> None:
         try:

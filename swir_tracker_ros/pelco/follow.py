@@ -61,6 +61,20 @@ def coast_factor(occluded_for: float, coast_time: float, coast_decay: float) -> 
     return min(max(1.0 - (occluded_for - coast_time) / coast_decay, 0.0), 1.0)
 
 
+def lead_factor(error: float, feed_forward: float, lead_limit: float) -> float:
+    """Weight of a measured target's feed-forward: clip(1 + sign(w_ff) * e / lead_limit, 0, 1).
+
+    While the head lags the target or is on it (the error points along the feed-forward rate) the rate
+    is trusted in full; as the head gets ahead of the target (the target is slowing down or stopping,
+    and the tracker's velocity estimate takes a few frames to follow) it fades out, reaching zero at a
+    lead of `lead_limit` rad. The lead at which a stopped target holds the head then falls from
+    w / kp to w / (kp + w / lead_limit). `lead_limit` 0 turns this off.
+    """
+    if lead_limit <= 0.0 or feed_forward == 0.0:
+        return 1.0
+    return min(max(1.0 + math.copysign(1.0, feed_forward) * error / lead_limit, 0.0), 1.0)
+
+
 def carried_error(error: float, target_rate: float, head_rate: float, age: float, max_age: float) -> float:
     """The error at `now` from an error measured `age` seconds ago: e + (w_target - w_head) * age.
 
@@ -149,6 +163,9 @@ class Follower:
         if not self.feed_forward_on:
             return Demand(err.pan, err.tilt, gain, (0.0, 0.0), age)
         ff = (p.feed_forward * weight * rate.pan, p.feed_forward * weight * rate.tilt)
+        if self.state != TrackState.OCCLUDED:  # a measured error says whether the target keeps its rate
+            ff = (ff[0] * lead_factor(err.pan, ff[0], p.lead_limit),
+                  ff[1] * lead_factor(err.tilt, ff[1], p.lead_limit))
         pan = carried_error(err.pan, ff[0], head_rate[0], age, p.error_prediction_max)
         tilt = carried_error(err.tilt, ff[1], head_rate[1], age, p.error_prediction_max)
         return Demand(pan, tilt, gain, ff, age)

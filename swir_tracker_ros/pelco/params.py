@@ -117,6 +117,10 @@ class PositionerParams:
         0.25, "carry a fresh error forward to now over at most this much of its age (target minus head "
         "rate), s; 0 = off", 0.0, 1.0,
     )
+    lead_limit: float = param(
+        0.003, "the feed-forward fades out as the head gets ahead of the tracked target, to zero at this "
+        "lead, rad (the target is stopping faster than its measured rate says); 0 = off", 0.0, 0.1,
+    )
     coast_time: float = param(
         1.0, "while the tracker reports 'occluded', keep feeding the target's last measured rate forward "
         "this long, s", 0.0, 10.0,
