@@ -123,3 +123,19 @@ def test_zoom_runs_until_stopped_and_its_position_is_reported() -> None:
     zoom = rig.bridge.feedback.zoom_position(rig.t)
     assert zoom is not None and 0.0 < zoom < 1.0
     assert zoom == pytest.approx(rig.link.head.zoom / rig.link.head.cfg.zoom_max, abs=0.01)
+
+
+def test_the_configure_check_names_a_head_that_does_not_answer() -> None:
+    import time
+
+    from swir_tracker_ros.pelco.feedback import probe_head
+
+    rig = Rig(address=2)  # the simulated head listens on address 1: nobody answers address 2
+    rig.link.poll()
+    b = rig.bridge
+    problem = probe_head(b.link, b.decoder, b.feedback, 0.1, time.monotonic)
+    assert "no reply from the head at address 2" in problem
+    rig = Rig()
+    rig.link.poll()
+    b = rig.bridge
+    assert probe_head(b.link, b.decoder, b.feedback, 0.1, time.monotonic) == ""

@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 from swir_tracker_ros.pelco import codec
 from swir_tracker_ros.pelco.controller import STOP, MotionCommand, PanTiltController
-from swir_tracker_ros.pelco.feedback import Feedback, Pose
+from swir_tracker_ros.pelco.feedback import Feedback, Pose, probe_head
 from swir_tracker_ros.pelco.follow import Demand, Follower, percentile_ms
 from swir_tracker_ros.pelco.link import Log, SerialLink, no_log
 from swir_tracker_ros.pelco.manual import (
@@ -305,19 +305,7 @@ class PositionerBridge:
         a position reply; '' on success, else why not (the lifecycle's configure)."""
         if not self.link.connected and not self.link.poll(self.clock()):
             return f"cannot open {self.p.port}"
-        if self.p.feedback_rate <= 0.0:
-            return ""
-        replies = self.feedback.replies
-        end = self.clock() + timeout
-        self.link.write(codec.query(self.p.address, "pan"))
-        while self.clock() < end and self.feedback.replies == replies:
-            for frame in self.decoder.feed(self.link.read()):
-                self.feedback.on_frame(frame, self.clock())
-            time.sleep(0.01)
-        if self.feedback.replies == replies:
-            return (f"no reply from the head at address {self.p.address} on {self.p.port} within "
-                    f"{timeout:g} s (wiring, baud, address?)")
-        return ""
+        return probe_head(self.link, self.decoder, self.feedback, timeout, self.clock)
 
     def shutdown(self) -> str:
         """Write a stop (reopening the port once if it is down), let it leave, close. Returns 'written',

@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from swir_tracker_ros.pelco import codec
@@ -124,3 +126,22 @@ class Feedback:
     def zoom_position(self, now: float) -> float | None:
         """Zoom as a fraction 0 (wide) .. 1 (tele) when the head reported it recently, else None."""
         return self.zoom.known(now, self.p.feedback_timeout) if self.p.zoom_feedback else None
+
+
+def probe_head(link: SerialLink, decoder: codec.StreamDecoder, feedback: Feedback, timeout: float,
+               clock: Callable[[], float] = time.monotonic) -> str:
+    """Query the pan position once on an open link and wait up to `timeout` s for the reply; '' when the
+    head answered (or is never queried: feedback_rate 0), else why not."""
+    p = feedback.p
+    if p.feedback_rate <= 0.0:
+        return ""
+    replies, end = feedback.replies, clock() + timeout
+    link.write(codec.query(p.address, "pan"))
+    while clock() < end and feedback.replies == replies:
+        for frame in decoder.feed(link.read()):
+            feedback.on_frame(frame, clock())
+        time.sleep(0.01)
+    if feedback.replies == replies:
+        return (f"no reply from the head at address {p.address} on {p.port} within {timeout:g} s "
+                "(wiring, baud, address?)")
+    return ""
