@@ -82,24 +82,29 @@ def test_controller_follows_the_feed_forward_inside_the_deadband_and_adds_it_out
     assert cmd.pan_speed == table.byte_for(math.degrees(p.kp * 0.05 + 0.02))
 
 
+def _closed_loop(rig: Rig, target, heard_rate, latency: float, until: float):
+    """Drive the fake-clock rig's simulated head after a target at angle target(t) (rad, pan): the bridge
+    hears the error `latency` s late and the rate heard_rate(t); yields (t, target, head) every 0.04 s."""
+    history: list[tuple[float, float]] = []
+    while rig.t < until:
+        t, head = rig.t, math.radians(rig.link.head.pan.angle)
+        history.append((t, target(t) - head))
+        seen = [e for s, e in history if s <= t - latency]
+        rate = heard_rate(t)
+        if seen:
+            rig.bridge.on_error(seen[-1], 0.0, now=t, age=latency)
+            rig.bridge.on_rate(rate, 0.0, now=t, age=latency)
+        rig.run(0.04)
+        yield t, target(t), head
+
+
 def _ramp_lag(feed_forward: float) -> float:
     """Mean |error| over the last 5 s of a target moving at a constant 1 deg/s, the error seen with a
     0.1 s latency (the tracker's), on the fake-clock rig with a simulated head."""
     rig = Rig(feed_forward=feed_forward, kp=1.0, deadband=0.0005, max_accel=0.5)
     rate = math.radians(1.0)
-    lag: list[float] = []
-    history: list[tuple[float, float]] = []
-    while rig.t < 12.0:
-        head = math.radians(rig.link.head.pan.angle)
-        target = rate * rig.t
-        history.append((rig.t, target - head))
-        seen = [e for t, e in history if t <= rig.t - 0.1]
-        if seen:
-            rig.bridge.on_error(seen[-1], 0.0, now=rig.t, age=0.1)
-            rig.bridge.on_rate(rate, 0.0, now=rig.t, age=0.1)
-        rig.run(0.04)
-        if rig.t > 7.0:
-            lag.append(abs(target - head))
+    loop = _closed_loop(rig, lambda t: rate * t, lambda t: rate, 0.1, 12.0)
+    lag = [abs(target - head) for t, target, head in loop if t > 7.0]
     return sum(lag) / len(lag)
 
 
@@ -121,23 +126,14 @@ def _overshoot_at_a_stop(lead_limit: float) -> float:
     fake-clock rig; the rate reaches the bridge through a first-order lag of 0.5 s (a Kalman velocity
     follows a stop over several frames) and the error 0.04 s late."""
     rig = Rig(lead_limit=lead_limit, max_accel=0.5)
-    true_rate, measured, stop_at = math.radians(1.5), 0.0, 6.0
-    history: list[tuple[float, float]] = []
-    past = 0.0
-    while rig.t < 9.0:
-        head = math.radians(rig.link.head.pan.angle)
-        target = true_rate * min(rig.t, stop_at)
-        rate = true_rate if rig.t < stop_at else 0.0
-        measured += (rate - measured) * 0.04 / 0.5
-        history.append((rig.t, target - head))
-        seen = [e for t, e in history if t <= rig.t - 0.04]
-        if seen:
-            rig.bridge.on_error(seen[-1], 0.0, now=rig.t, age=0.04)
-            rig.bridge.on_rate(measured, 0.0, now=rig.t, age=0.04)
-        rig.run(0.04)
-        if rig.t > stop_at:
-            past = max(past, head - target)
-    return past
+    true_rate, stop_at, measured = math.radians(1.5), 6.0, [0.0]
+
+    def heard(t: float) -> float:  # first-order lag of the true rate, 0.04 s steps
+        measured[0] += ((true_rate if t < stop_at else 0.0) - measured[0]) * 0.04 / 0.5
+        return measured[0]
+
+    loop = _closed_loop(rig, lambda t: true_rate * min(t, stop_at), heard, 0.04, 9.0)
+    return max(head - target for t, target, head in loop if t > stop_at)
 
 
 def test_fading_the_rate_as_the_head_leads_cuts_the_overshoot_when_the_target_stops() -> None:
