@@ -9,7 +9,8 @@ from swir_tracker_ros.topics import QoS
 
 
 def profile(qos: QoS) -> QoSProfile:
-    """Keep-last `qos.depth`, reliable or best effort, volatile."""
+    """Keep-last `qos.depth`, reliable or best effort, volatile or transient local."""
     reliability = ReliabilityPolicy.RELIABLE if qos.reliable else ReliabilityPolicy.BEST_EFFORT
-    return QoSProfile(depth=qos.depth, history=HistoryPolicy.KEEP_LAST, durability=DurabilityPolicy.VOLATILE,
+    durability = DurabilityPolicy.TRANSIENT_LOCAL if qos.transient_local else DurabilityPolicy.VOLATILE
+    return QoSProfile(depth=qos.depth, history=HistoryPolicy.KEEP_LAST, durability=durability,
                       reliability=reliability)

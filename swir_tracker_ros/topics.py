@@ -98,10 +98,12 @@ SERVICE_TYPES: dict[str, str] = {
 
 @dataclass(frozen=True)
 class QoS:
-    """A keep-last QoS: history depth and reliable (True) or best-effort (False) delivery; volatile."""
+    """A keep-last QoS: history depth and reliable (True) or best-effort (False) delivery; volatile unless
+    `transient_local` (late subscribers get the last `depth` samples)."""
 
     depth: int
     reliable: bool
+    transient_local: bool = False
 
 
 # Inputs from sensors: the newest sample only, never waiting for a lost one (a best-effort subscriber
@@ -118,3 +120,22 @@ CAMERA = QoS(2, reliable=True)
 # Recorders (demo supervisor, harness replay): reliable with room for bursts; images shallower.
 RECORD = QoS(50, reliable=True)
 RECORD_IMAGE = QoS(10, reliable=True)
+
+# The pan-tilt head's control surface and the target's rate (issue 34; docs/positioner.md). Relative names:
+# they resolve in the node's namespace (`__ns:=/head1` moves a head and its tracker together).
+TARGET_RATE = "track/target_rate"  # Vector3Stamped: the target's angular rate, rad/s (x pan, y tilt)
+HEAD_MODE = "positioner/mode"  # swir_tracker_interfaces/HeadMode, LATCHED
+HEAD_SET_MODE = "positioner/set_mode"  # swir_tracker_interfaces/SetHeadMode service
+HEAD_JOG = "positioner/jog"  # swir_tracker_interfaces/HeadJog (dead-man jog by joint rate)
+HEAD_MOVE = "positioner/move"  # swir_tracker_interfaces/MoveHead action
+HEAD_GOTO_PRESET = "positioner/goto_preset"  # swir_tracker_interfaces/HeadPreset service
+HEAD_SET_PRESET = "positioner/set_preset"  # swir_tracker_interfaces/HeadPreset service
+HEAD_CLEAR_PRESET = "positioner/clear_preset"  # swir_tracker_interfaces/HeadPreset service
+HEAD_ZOOM = "positioner/zoom"  # swir_tracker_interfaces/ZoomHead service
+TYPES.update({
+    TARGET_RATE: "geometry_msgs/msg/Vector3Stamped",
+    HEAD_MODE: "swir_tracker_interfaces/msg/HeadMode",
+    HEAD_JOG: "swir_tracker_interfaces/msg/HeadJog",
+})
+# State that a late subscriber must still get (who owns the head): the last sample, kept by the publisher.
+LATCHED = QoS(1, reliable=True, transient_local=True)

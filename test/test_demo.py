@@ -17,7 +17,7 @@ from swir_tracker_ros.demo.analysis import occlusion_episodes, series, summarise
 from swir_tracker_ros.demo.config import DemoParams, load_demo_params
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.report import make_plots, text_table, write_reports
-from swir_tracker_ros.demo.run import pty_url
+from swir_tracker_ros.demo.runner import pty_url
 from swir_tracker_ros.errors import DemoError
 
 CAM = {"width": 576, "height": 504, "fx": 4118.0, "fy": 4118.0, "cx": 288.0, "cy": 252.0}
@@ -84,7 +84,7 @@ def test_episodes_from_scene_visibility_cover_a_target_out_of_view() -> None:
 def test_false_tracking_and_skipped_frames_are_counted() -> None:
     """`tracking` on a box that does not overlap the target is false tracking; frames with no output
     are skipped; both decide a sweep run's success."""
-    from swir_tracker_ros.demo import sweep
+    from swir_tracker_ros.demo import table
 
     rec = synthetic_records()
     assert summarise(rec).false_tracking_frames == 0
@@ -95,12 +95,12 @@ def test_false_tracking_and_skipped_frames_are_counted() -> None:
     del rec.state[130:133], rec.track[130:133]
     s = summarise(rec)
     assert s.false_tracking_frames == 10 and s.frames_skipped == 3
-    assert not sweep.succeeded(s) and sweep.succeeded(summarise(synthetic_records()))
-    rows = [sweep.row_from("demo", 3, True, 1, s, REPO),
-            sweep.row_from("demo", 4, True, 1, summarise(synthetic_records()), REPO)]
-    table = sweep.text(rows)
-    assert "false-tracking frames" in table and "3/150" in table and "demo: 1 of 2 runs succeeded" in table
-    assert sweep.markdown(rows).count("\n| demo |") == 2
+    assert not table.succeeded(s) and table.succeeded(summarise(synthetic_records()))
+    rows = [table.row_from("demo", 3, True, 1, s, REPO),
+            table.row_from("demo", 4, True, 1, summarise(synthetic_records()), REPO)]
+    text = table.text(rows)
+    assert "false-tracking frames" in text and "3/150" in text and "demo: 1 of 2 runs succeeded" in text
+    assert table.markdown(rows).count("\n| demo |") == 2
 
 
 def test_init_is_answered_by_tracking_after_the_first_init() -> None:
@@ -139,11 +139,11 @@ def test_reports_and_plots_are_written(tmp_path) -> None:
     runs = [(r, summarise(r)) for r in (synthetic_records(True), synthetic_records(False, recover=False))]
     plots = make_plots(tmp_path, runs, [tmp_path / "missing.csv"] * 2)
     assert all(p.stat().st_size > 10_000 for p in plots)
-    from swir_tracker_ros.demo import sweep
+    from swir_tracker_ros.demo import table
 
-    rows = [sweep.row_from("demo", 7, r.ego_motion_compensation, 1, s, tmp_path) for r, s in runs]
+    rows = [table.row_from("demo", 7, r.ego_motion_compensation, 1, s, tmp_path) for r, s in runs]
     paths = write_reports(tmp_path, [s for _, s in runs], {"files": {"plot": "plots/centring_error.png"},
-                                                           "sweep_markdown": sweep.markdown(rows)})
+                                                           "sweep_markdown": table.markdown(rows)})
     data = json.loads(paths["json"].read_text())
     assert [r["ego_motion_compensation"] for r in data["runs"]] == [True, False]
     assert "occlusions survived" in paths["md"].read_text()

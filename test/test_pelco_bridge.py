@@ -102,13 +102,13 @@ def test_watchdog_stops_after_the_last_error_message() -> None:
 @pytest.mark.parametrize("state, moves", [(TrackState.LOST, False), (TrackState.IDLE, False),
                                           (TrackState.TRACKING, True), (TrackState.OCCLUDED, True)])
 def test_tracker_state_gates_motion(state, moves) -> None:
-    rig = Rig()
+    rig = Rig(occluded_gain=0.5)
     rig.bridge.on_state(state)
     rig.run(0.5, error=(0.1, 0.0))
     assert (rig.motions()[-1] != (0, 0, 0, 0)) == moves
 
 
-def test_occluded_gain_zero_stops() -> None:
+def test_occluded_gain_zero_stops_without_a_rate_to_coast_on() -> None:
     rig = Rig(occluded_gain=0.0)
     rig.bridge.on_state(TrackState.OCCLUDED)
     rig.run(0.5, error=(0.1, 0.0))
@@ -116,11 +116,11 @@ def test_occluded_gain_zero_stops() -> None:
 
 
 def test_sends_on_change_or_keepalive_only() -> None:
-    rig = Rig(keepalive_period=0.5, feedback_rate=0.0, control_rate=20.0)
+    rig = Rig(keepalive_period=0.5, feedback_rate=0.0, control_rate=20.0, max_accel=0.0)
     rig.run(2.0, error=(0.1, 0.0))
     # one stop at connect, one move on the first control period, then a keep-alive every 0.5 s
     assert 4 <= len(rig.link.written) <= 6
-    rig2 = Rig(keepalive_period=0.0, feedback_rate=0.0)
+    rig2 = Rig(keepalive_period=0.0, feedback_rate=0.0, max_accel=0.0)
     rig2.run(2.0, error=(0.1, 0.0))
     assert len(rig2.link.written) == 2
 
@@ -146,8 +146,8 @@ def test_feedback_pose_soft_limit_and_shutdown() -> None:
     head = rig.link.head
     assert pose.tilt == pytest.approx(math.radians(head.tilt.angle), abs=math.radians(2.0))
     assert 8.0 < head.tilt.angle < 10.2 and head.tilt.velocity == 0.0  # slowed down, stopped at the limit
-    assert rig.bridge.replies > 10 and rig.bridge.decoder.checksum_errors == 0
-    assert rig.bridge.shutdown()
+    assert rig.bridge.feedback.replies > 10 and rig.bridge.decoder.checksum_errors == 0
+    assert rig.bridge.shutdown() == "written"
     assert rig.link.written[-1].to_bytes() == codec.stop(1) and not rig.link.connected
 
 

@@ -35,7 +35,7 @@ def test_speed_table_interpolates_and_inverts() -> None:
 
 
 def test_positive_errors_move_left_and_up_at_the_table_speed() -> None:
-    c = PanTiltController(P)
+    c = PanTiltController(replace(P, max_accel=0.0))
     cmd = c.step(0.1, 0.05, 0.05)
     # pan + = left (CCW from above) -> Pelco left; tilt + = up -> Pelco up (docs/interfaces.md).
     assert (cmd.pan_dir, cmd.tilt_dir) == (-1, 1)

@@ -14,7 +14,7 @@ from swir_tracker_ros.pelco.params import PositionerParams
 
 def test_yaml_covers_every_field_and_validates() -> None:
     doc = yaml.safe_load((REPO / "params" / "positioner.yaml").read_text())
-    values = doc["positioner_bridge"]["ros__parameters"]
+    values = doc["/**"]["ros__parameters"]
     assert set(values) == {f.name for f in fields(PositionerParams)}
     params = PositionerParams(**values).validate()
     validate_params(params)

@@ -16,6 +16,10 @@ OCCLUDED_BELOW = 0.5  # an occlusion episode: less than half of the target visib
 MIN_EPISODE_S = 0.2  # ... for at least this long (shorter dips are merged into neighbours or ignored)
 RECOVERY_S = 1.0  # survived: on target within this long after the target is visible again
 ON_TARGET_PX = 20.0  # on target: track centre within max(this, half the target width) of the truth
+SETTLE_S = 3.0  # the settled centring error counts from this long after the track starts (issue 34)
+MOVING_DEG_S = 0.2  # the target moves along an axis while its true angular rate exceeds this ...
+MIN_RUN_S = 0.5  # ... and a stop or turn ends a motion that lasted at least this long
+OVERSHOOT_WINDOW_S = 2.0  # the head's overshoot is looked for this long after a stop or turn
 
 
 @dataclass(frozen=True)
@@ -31,6 +35,8 @@ class Series:
     gt: list  # Box-like [x, y, w, h] or None per frame
     track: list  # [x, y, w, h] or None: the tracker's box for that frame (None: no output for it)
     state: list  # tracker state string for that frame ("" when none arrived)
+    head_pan: np.ndarray  # head pose the frame was rendered at, rad
+    head_tilt: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -77,6 +83,17 @@ class RunSummary:
     # Largest pan/tilt turn towards the target's initial direction (positive: the head went that way).
     head_turn_towards_deg: list[float] = field(default_factory=list)
     episodes: list[dict] = field(default_factory=list)
+    # From SETTLE_S after the track started to the end of the run (issue 34): the true angle of the target
+    # from the optical axis, and the head's largest overshoot after the target stopped or turned.
+    centring_error_settled_mean_deg: float = math.nan
+    centring_error_settled_p95_deg: float = math.nan
+    overshoot_deg: float = 0.0
+    stop_turn_events: list[dict] = field(default_factory=list)  # scene t, axis, kind, overshoot_deg
+    # Latency budget of the loop, from the bridge's /diagnostics (ms): frame stamp -> error at the bridge,
+    # frame stamp -> Pelco frame written (p50 over the report windows; p95: 95th percentile of their p95).
+    bridge_error_age_p50_ms: float = math.nan
+    bridge_command_age_p50_ms: float = math.nan
+    bridge_command_age_p95_ms: float = math.nan
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -113,7 +130,7 @@ def series(rec: RunRecords) -> Series:
     states = [s or "" for s in _nearest(st_stamps, [r[2] for r in rec.state], stamps)]
     return Series(truth[:, 1], stamps, pan_e, tilt_e, truth[:, 3], centre_in,
                   _nearest(gt_stamps, [g[1] for g in rec.gt], stamps),
-                  _nearest(tr_stamps, [r[2] for r in rec.track], stamps), states)
+                  _nearest(tr_stamps, [r[2] for r in rec.track], stamps), states, truth[:, 6], truth[:, 7])
 
 
 def _on_target(gt: list | None, track: list | None) -> bool:
@@ -173,6 +190,78 @@ def occlusion_episodes(s: Series, visibility: np.ndarray | None = None) -> list[
     return episodes
 
 
+def track_start(rec: RunRecords, s: Series) -> float:
+    """Stamp of the tracker's first `tracking` / `occluded` report for a frame at or after the first init
+    (the supervisor's `init_answered`); the first frame's stamp when there is none."""
+    init = rec.init_time if math.isfinite(rec.init_time) else -math.inf
+    starts = [r[0] for r in rec.state if r[2] in ("tracking", "occluded") and r[0] >= init]
+    return min(starts) if starts else (float(s.stamp[0]) if len(s.stamp) else math.nan)
+
+
+def stop_turn_events(t: np.ndarray, direction: np.ndarray) -> list[tuple[float, int, str, float]]:
+    """(time, sign of the rate before, 'stop' | 'turn', time the target moves again) where the target's
+    motion along one axis ends.
+
+    `direction` is the target's true angle (deg) over time `t`; its rate is a central difference over
+    +-0.1 s. A motion is a run of at least MIN_RUN_S with |rate| > MOVING_DEG_S in one direction; it ends
+    in a stop (the rate falls below that) or a turn (the rate changes sign at once). The last 0.1 s, where
+    the difference runs off the data, ends nothing.
+    """
+    if len(t) < 3:
+        return []
+    rate = (np.interp(t + 0.1, t, direction) - np.interp(t - 0.1, t, direction)) / 0.2
+    sign = np.where(np.abs(rate) > MOVING_DEG_S, np.sign(rate), 0.0)
+    events, start = [], 0
+    for i in range(1, len(t)):
+        if sign[i] == sign[start]:
+            continue
+        if sign[start] != 0 and t[i - 1] - t[start] >= MIN_RUN_S and t[i] < t[-1] - 0.1:
+            moving_again = np.flatnonzero(sign[i:] != 0)
+            t_next = float(t[i + moving_again[0]]) if moving_again.size else float(t[-1])
+            events.append((float(t[i]), int(sign[start]), "stop" if sign[i] == 0 else "turn", t_next))
+        start = i
+    return events
+
+
+def overshoots(s: Series, settled: np.ndarray) -> list[dict]:
+    """The head's overshoot at every stop or turn of the target in the settled window: how far the optical
+    axis travelled past the point where the target stopped or turned (deg), within OVERSHOOT_WINDOW_S and,
+    after a stop, before the target moves again (the head then follows it past that point, rightly)."""
+    out = []
+    for axis, head, error in (("pan", s.head_pan, s.pan_error), ("tilt", s.head_tilt, s.tilt_error)):
+        direction = np.degrees(head + error)
+        for t_e, sign, kind, t_next in stop_turn_events(s.t, direction):
+            end = t_e + OVERSHOOT_WINDOW_S if kind == "turn" else min(t_next, t_e + OVERSHOOT_WINDOW_S)
+            window = settled & (s.t >= t_e) & (s.t <= end)
+            if window.any():
+                past = sign * (np.degrees(head[window]) - np.interp(t_e, s.t, direction))
+                out.append({"t": round(t_e, 2), "axis": axis, "kind": kind,
+                            "overshoot_deg": max(0.0, float(np.max(past)))})
+    return out
+
+
+def diagnostic_series(rec: RunRecords, name: str, key: str, t0: float, t1: float) -> np.ndarray:
+    """The finite values of `key` in status `name`'s /diagnostics reports received in [t0, t1 + 1.5 s]."""
+    out = []
+    for d in rec.diagnostics:
+        if d.get("name") == name and t0 <= d.get("recv", 0.0) <= t1 + 1.5:
+            try:
+                out.append(float(d["values"][key]))
+            except (KeyError, TypeError, ValueError):
+                continue
+    values = np.array(out)
+    return values[np.isfinite(values)]
+
+
+def bridge_latency(rec: RunRecords, t0: float, t1: float) -> tuple[float, float, float]:
+    """(frame -> bridge p50, frame -> Pelco frame p50, its p95) in ms from the bridge's /diagnostics."""
+    def series_(key: str) -> np.ndarray:
+        return diagnostic_series(rec, "swir_tracker/positioner", key, t0, t1)
+
+    return (_stat(series_("error_age_ms_p50"), 50), _stat(series_("command_age_ms_p50"), 50),
+            _stat(series_("command_age_ms_p95"), 95))
+
+
 def _stat(values: np.ndarray, q: float | None = None) -> float:
     values = values[np.isfinite(values)]
     if values.size == 0:
@@ -210,6 +299,9 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
         if len(during):
             for i, offset in enumerate((s.pan_error[0], s.tilt_error[0])):
                 towards[i] = math.degrees(float(np.max((during[:, 1 + i] - start[1 + i]) * np.sign(offset))))
+    settled = s.stamp >= track_start(rec, s) + SETTLE_S if n else np.zeros(0, bool)
+    events = overshoots(s, settled)
+    ages = bridge_latency(rec, t0, t1)
     return RunSummary(
         label=rec.label, ego_motion_compensation=rec.ego_motion_compensation, outcome=rec.outcome,
         duration_s=float(s.t[-1]) if n else 0.0, frames=n,
@@ -230,6 +322,10 @@ def summarise(rec: RunRecords, visibility_fn=None) -> RunSummary:
         final_state=next((r[2] for r in reversed(rec.state) if r[0] <= t1 + 1e-6), ""),
         initial_offset_deg=[math.degrees(s.pan_error[0]), math.degrees(s.tilt_error[0])] if n else [],
         head_travel_deg=travel, head_turn_towards_deg=towards, episodes=[asdict(e) for e in episodes],
+        centring_error_settled_mean_deg=math.degrees(_stat(err[settled])),
+        centring_error_settled_p95_deg=math.degrees(_stat(err[settled], 95)),
+        overshoot_deg=max((e["overshoot_deg"] for e in events), default=0.0), stop_turn_events=events,
+        bridge_error_age_p50_ms=ages[0], bridge_command_age_p50_ms=ages[1], bridge_command_age_p95_ms=ages[2],
     )
 
 
@@ -240,16 +336,9 @@ def tracker_latency_ms(rec: RunRecords, t0: float, t1: float) -> np.ndarray:
     the node clock) when it reports them; otherwise stamp to arrival at the recorder, which also counts
     the recorder's own queue (it records every camera image, so it lags when the machine is busy).
     """
-    ages = []
-    for d in rec.diagnostics:
-        if d.get("name") == "swir_tracker/tracker_node" and t0 <= d.get("recv", 0.0) <= t1 + 1.5:
-            try:
-                ages.append(float(d["values"]["stamp_age_ms_p50"]))
-            except (KeyError, TypeError, ValueError):
-                continue
-    ages = [a for a in ages if math.isfinite(a)]
-    if ages:
-        return np.array(ages)
+    ages = diagnostic_series(rec, "swir_tracker/tracker_node", "stamp_age_ms_p50", t0, t1)
+    if len(ages):
+        return ages
     return np.array([(r[1] - r[0]) * 1e3 for r in rec.error if t0 <= r[0] <= t1])
 
 

@@ -18,7 +18,8 @@ from swir_tracker_ros.errors import DemoError
 # Topics recorded into the bag and their ROS 2 types (docs/interfaces.md; /ground_truth/state: docs/demo.md).
 RECORDED_TOPICS: dict[str, str] = {t: topics.TYPES[t] for t in (
     topics.IMAGE, topics.CAMERA_INFO, topics.GROUND_TRUTH_BOX, topics.GROUND_TRUTH_STATE, topics.TRACK_INIT,
-    topics.TRACK_BOX, topics.PAN_TILT_ERROR, topics.TRACK_STATE, topics.JOINT_STATES, topics.DIAGNOSTICS)}
+    topics.TRACK_BOX, topics.PAN_TILT_ERROR, topics.TARGET_RATE, topics.TRACK_STATE, topics.JOINT_STATES,
+    topics.DIAGNOSTICS)}
 
 
 class BagRecorder:
@@ -81,6 +82,7 @@ class RunRecords:
     truth: list[list[float]] = field(default_factory=list)
     track: list[list[Any]] = field(default_factory=list)  # [stamp, recv, box|None]
     error: list[list[float]] = field(default_factory=list)  # [stamp, recv, pan_err, tilt_err]
+    rate: list[list[float]] = field(default_factory=list)  # [stamp, recv, pan, tilt] of track/target_rate
     state: list[list[Any]] = field(default_factory=list)  # [stamp, recv, state]
     joints: list[list[float]] = field(default_factory=list)  # [stamp, recv, pan, tilt]
     frames: list[list[float]] = field(default_factory=list)  # [stamp, recv] of /camera/image_raw

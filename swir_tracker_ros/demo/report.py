@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from swir_tracker_ros.demo.analysis import RunSummary, read_trace, series
+from swir_tracker_ros.demo.analysis import SETTLE_S, RunSummary, read_trace, series, track_start
 from swir_tracker_ros.demo.recording import RunRecords
 
 COLOURS = {True: "tab:blue", False: "tab:orange"}
@@ -51,6 +51,42 @@ def plot_errors(runs: list[tuple[RunRecords, RunSummary]], path: Path) -> Path:
     for ax in axes:
         ax.axhline(0.0, color="black", lw=0.5)
         ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def plot_settled(runs: list[tuple[RunRecords, RunSummary]], path: Path) -> Path:
+    """The settled centring error (from SETTLE_S after the track starts): pan and tilt, zoomed in, with
+    each run's mean and p95 in the legend and the target's stops and turns marked."""
+    fig, axes = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)
+    top = 0.5
+    for rec, summ in runs:
+        s = series(rec)
+        keep = s.stamp >= track_start(rec, s) + SETTLE_S
+        tag = "on" if rec.ego_motion_compensation else "off"
+        name = (f"ego-motion compensation {tag}: mean {summ.centring_error_settled_mean_deg:.3f}, "
+                f"p95 {summ.centring_error_settled_p95_deg:.3f} deg")
+        for ax, values in zip(axes, (s.pan_error, s.tilt_error)):
+            deg = np.degrees(values[keep])
+            ax.plot(s.t[keep], deg, color=COLOURS[rec.ego_motion_compensation], lw=1.0, label=name)
+            top = max(top, float(np.percentile(np.abs(deg), 99)) if deg.size else 0.0)
+    if runs:
+        for ax, axis in zip(axes, ("pan", "tilt")):
+            _shade_occlusions(ax, runs[0][1])
+            for e in runs[0][1].stop_turn_events:
+                if e["axis"] == axis:
+                    ax.axvline(e["t"], color="purple", ls="--", lw=0.8)
+                    ax.text(e["t"], 0.9 * top, f" {e['kind']}", color="purple", fontsize=7)
+    for ax, label in zip(axes, ("pan error (deg)", "tilt error (deg)")):
+        ax.set_ylim(-1.1 * top, 1.1 * top)
+        ax.set_ylabel(label)
+        ax.axhline(0.0, color="black", lw=0.5)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="lower right", fontsize=7)
+    axes[0].set_title(f"Settled centring error (from {SETTLE_S:g} s after the track starts)")
+    axes[1].set_xlabel("scene time (s); grey: target occluded; purple: the target stops or turns")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -106,6 +142,10 @@ ROWS = (
     ("  in view at the end", "in_view_at_end", "{}"),
     ("centring error, mean", "centring_error_mean_deg", "{:.3f} deg"),
     ("centring error, 95th percentile", "centring_error_p95_deg", "{:.3f} deg"),
+    ("centring error settled (3 s after the track starts), mean", "centring_error_settled_mean_deg",
+     "{:.3f} deg"),
+    ("centring error settled, 95th percentile", "centring_error_settled_p95_deg", "{:.3f} deg"),
+    ("largest overshoot after the target stops or turns", "overshoot_deg", "{:.3f} deg"),
     ("centring error, mean (pixels)", "centring_error_mean_px", "{:.1f} px"),
     ("centring error, 95th percentile (pixels)", "centring_error_p95_px", "{:.1f} px"),
     ("tracker box centre error, mean", "track_centre_error_mean_px", "{:.1f} px"),
@@ -118,6 +158,9 @@ ROWS = (
     ("tracker outputs/s", "tracker_fps", "{:.1f}"),
     ("latency frame stamp -> tracker output, p50", "latency_p50_ms", "{:.1f} ms"),
     ("latency frame stamp -> tracker output, p95", "latency_p95_ms", "{:.1f} ms"),
+    ("latency frame stamp -> error at the bridge, p50", "bridge_error_age_p50_ms", "{:.1f} ms"),
+    ("latency frame stamp -> Pelco frame written, p50", "bridge_command_age_p50_ms", "{:.1f} ms"),
+    ("latency frame stamp -> Pelco frame written, p95", "bridge_command_age_p95_ms", "{:.1f} ms"),
     ("frames with state lost", "lost_frames", "{}"),
     ("final tracker state", "final_state", "{}"),
 )
@@ -185,7 +228,9 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
         ends = (f"{n} exit {v['returncode']} ({v['how']}, {v.get('cpu_s', float('nan')):.1f} s CPU)"
                 for n, v in exits.items())
         md.append(f"- {label}: " + ", ".join(ends))
-    md += ["", "![centring error](plots/centring_error.png)", "", "![head angles](plots/head_angles.png)", ""]
+    md += ["", "![centring error](plots/centring_error.png)", "",
+           "![settled centring error](plots/centring_error_settled.png)", "",
+           "![head angles](plots/head_angles.png)", ""]
     (out / "report.md").write_text("\n".join(md))
 
     def cell(tag: str, text: str) -> str:
@@ -214,7 +259,8 @@ def write_reports(out: Path, summaries: list[RunSummary], extras: dict) -> dict[
         "border-bottom:1px solid #ddd;text-align:left}</style></head><body>"
         "<h1>Closed-loop pan-tilt demo</h1>"
         f"<p>{html.escape(md[2])}</p><p>{html.escape(md[4])}</p><table>{table}</table>{sweep_html}"
-        "<h2>Plots</h2><img src='plots/centring_error.png'><img src='plots/head_angles.png'>"
+        "<h2>Plots</h2><img src='plots/centring_error.png'><img src='plots/centring_error_settled.png'>"
+        "<img src='plots/head_angles.png'>"
         f"<h2>Debug video</h2>{videos}{gifs}"
         "<p>MP4 uses the MPEG-4 Part 2 codec: if the browser does not play it, open the file with a video "
         "player (VLC, mpv, ffplay).</p></body></html>")
@@ -227,4 +273,5 @@ def make_plots(out: Path, runs: list[tuple[RunRecords, RunSummary]], trace_paths
     plots.mkdir(parents=True, exist_ok=True)
     traces = [read_trace(p) for p in trace_paths]
     return [plot_errors(runs, plots / "centring_error.png"),
+            plot_settled(runs, plots / "centring_error_settled.png"),
             plot_head(runs, traces, plots / "head_angles.png")]

@@ -24,6 +24,7 @@ from msg_adapters.ground_truth import ground_truth_state_values, scene_start_tim
 from msg_adapters.image import image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.qos import profile
+from msg_adapters.rate import target_rate_from_msg
 from msg_adapters.stamps import msg_seconds, serialized_seconds
 from msg_adapters.track_state import track_state_from_msg
 from swir_tracker_ros import topics
@@ -149,6 +150,9 @@ class DemoSupervisor(Node):
         elif topic == topics.PAN_TILT_ERROR:
             pan, tilt, stamp = pan_tilt_error_from_msg(msg)
             self.rec.error.append([stamp, now, pan, tilt])
+        elif topic == topics.TARGET_RATE:
+            pan, tilt, stamp = target_rate_from_msg(msg)
+            self.rec.rate.append([stamp, now, pan, tilt])
         elif topic == topics.TRACK_STATE:
             state = track_state_from_msg(msg).value
             stamp = msg_seconds(msg)

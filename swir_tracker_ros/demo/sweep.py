@@ -10,94 +10,16 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 
-from swir_tracker_ros.demo.analysis import RunSummary
+from swir_tracker_ros.demo.analysis import summarise
 from swir_tracker_ros.demo.config import load_demo_params
+from swir_tracker_ros.demo.recording import RunRecords
+from swir_tracker_ros.demo.runner import run_once
+from swir_tracker_ros.demo.table import SUCCESS_IN_VIEW, SweepRow, markdown, row_from, text
 from swir_tracker_ros.errors import DemoError
-from swir_tracker_ros.scene.demo_scene import VARIANTS
-
-# A run succeeds when the target is in view at the end and for at least this share of the run, and the
-# tracker never reported `tracking` off the target (issue 13's "done when").
-SUCCESS_IN_VIEW = 0.95
-
-
-def succeeded(s: RunSummary) -> bool:
-    """In view at the end and >= SUCCESS_IN_VIEW of the time, 0 false-tracking frames, run completed."""
-    return (s.outcome == "completed" and s.in_view_at_end and s.in_view_fraction >= SUCCESS_IN_VIEW
-            and s.false_tracking_frames == 0)
-
-
-@dataclass
-class SweepRow:
-    """One run of the sweep: which scene and seed, its scores, the machine's load while it ran."""
-
-    scene: str
-    seed: int
-    ego: bool
-    repeat: int
-    summary: dict
-    success: bool
-    load_average: float  # 1-minute load average at the end of the run
-    folder: str
-    cpu_s: dict = field(default_factory=dict)  # CPU seconds of each process of the run
-
-
-COLUMNS = (
-    ("scene", lambda r: r.scene),
-    ("seed", lambda r: str(r.seed)),
-    ("ego", lambda r: "on" if r.ego else "off"),
-    ("in view", lambda r: f"{r.summary['in_view_fraction']:.1%}"),
-    ("at end", lambda r: "yes" if r.summary["in_view_at_end"] else "NO"),
-    ("centring err mean/p95 deg", lambda r: f"{r.summary['centring_error_mean_deg']:.2f} / "
-                                            f"{r.summary['centring_error_p95_deg']:.2f}"),
-    ("occl. survived", lambda r: f"{r.summary['occlusions_survived']}/{r.summary['occlusions']}"),
-    ("false-tracking frames", lambda r: str(r.summary["false_tracking_frames"])),
-    ("lost frames", lambda r: str(r.summary["lost_frames"])),
-    ("camera / tracker fps", lambda r: f"{r.summary['camera_fps']:.1f} / {r.summary['tracker_fps']:.1f}"),
-    ("frames skipped", lambda r: f"{r.summary['frames_skipped']}/{r.summary['frames']}"),
-    ("final state", lambda r: r.summary["final_state"]),
-    ("load", lambda r: f"{r.load_average:.1f}"),
-    ("success", lambda r: "yes" if r.success else "NO"),
-)
-
-
-def table_rows(rows: list[SweepRow]) -> list[list[str]]:
-    """Header plus one row per run (the sweep table)."""
-    return [[c for c, _ in COLUMNS], *[[fn(r) for _, fn in COLUMNS] for r in rows]]
-
-
-def success_lines(rows: list[SweepRow]) -> list[str]:
-    """Success rate per scene and over all runs."""
-    lines = []
-    for scene in dict.fromkeys(r.scene for r in rows):
-        mine = [r for r in rows if r.scene == scene]
-        lines.append(f"{scene}: {sum(r.success for r in mine)} of {len(mine)} runs succeeded")
-    if len({r.scene for r in rows}) > 1:
-        lines.append(f"all: {sum(r.success for r in rows)} of {len(rows)} runs succeeded")
-    return lines
-
-
-def markdown(rows: list[SweepRow]) -> str:
-    t = table_rows(rows)
-    out = ["| " + " | ".join(t[0]) + " |", "|" + "---|" * len(t[0])]
-    out += ["| " + " | ".join(r) + " |" for r in t[1:]]
-    return "\n".join(out + [""] + [f"- {line}" for line in success_lines(rows)])
-
-
-def text(rows: list[SweepRow]) -> str:
-    t = table_rows(rows)
-    widths = [max(len(r[i]) for r in t) for i in range(len(t[0]))]
-    body = "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in t)
-    return body + "\n" + "\n".join(success_lines(rows))
-
-
-def row_from(scene: str, seed: int, ego: bool, repeat: int, summary: RunSummary, folder: Path,
-             exits: dict | None = None) -> SweepRow:
-    cpu = {name: e.get("cpu_s") for name, e in (exits or {}).items()}
-    return SweepRow(scene, seed, ego, repeat, summary.as_dict(), succeeded(summary), os.getloadavg()[0],
-                    str(folder), cpu)
+from swir_tracker_ros.scene.demo_scene import VARIANTS, build_scene, target_visibility
 
 
 class BackgroundLoad:
@@ -149,10 +71,6 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from swir_tracker_ros.demo.analysis import summarise
-    from swir_tracker_ros.demo.run import run_once
-    from swir_tracker_ros.scene.demo_scene import build_scene, target_visibility
-
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:
         base = load_demo_params(args.params).with_overrides(duration_s=args.duration, bag_images=False)
@@ -186,8 +104,6 @@ def main(argv: list[str] | None = None) -> int:
                 rec_path = folder / ("ego_on" if ego else "ego_off") / "records.json"
                 if not rec_path.is_file():
                     continue
-                from swir_tracker_ros.demo.recording import RunRecords
-
                 scene_built = build_scene(scene, seed)
                 exits = {}
                 summary = summarise(RunRecords.load(rec_path),

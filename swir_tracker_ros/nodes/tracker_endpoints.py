@@ -61,6 +61,11 @@ ENDPOINTS: tuple[Endpoint, ...] = (
     Endpoint(topics.TRACK_BOX, topics.TYPES[topics.TRACK_BOX], "out", "reliable, 10", _BOX),
     Endpoint(topics.PAN_TILT_ERROR, topics.TYPES[topics.PAN_TILT_ERROR], "out", "reliable, 10",
              "x = pan error, y = tilt error (rad), z = 0; only while `tracking` / `occluded`"),
+    Endpoint(topics.TARGET_RATE, topics.TYPES[topics.TARGET_RATE], "out", "reliable, 10",
+             "the target's angular rate (rad/s, x pan, y tilt, REP-103) in the head's base frame: the Kalman "
+             "box-centre velocity through the intrinsics over the camera's median frame period, plus the "
+             "head's rate from the joint states when `ego_motion_compensation` is off; with the error, once "
+             "5 frame intervals are known (the bridge feeds it forward, docs/positioner.md)"),
     Endpoint(topics.TRACK_STATE, topics.TYPES[topics.TRACK_STATE], "out", "reliable, 10", _STATE),
     Endpoint(topics.TRACK_STATE_TYPED, topics.TYPES[topics.TRACK_STATE_TYPED], "out", "reliable, 10",
              "the same state as typed fields (box as whole pixels, frames_occluded)"),

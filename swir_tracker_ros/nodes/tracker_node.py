@@ -21,6 +21,7 @@ from msg_adapters.geometry import box_from_roi, ego_shift
 from msg_adapters.image import Frame, image_to_numpy
 from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.qos import profile
+from msg_adapters.rate import head_rate
 from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
@@ -161,7 +162,7 @@ class TrackerNode(Node):
                              elapsed + self._untracked)
         self._untracked = 0.0
         core_ms = (time.perf_counter() - t_core) * 1e3
-        self.outputs.publish(hdr, result, intr)
+        self.outputs.publish(hdr, result, intr, self._head_motion(stamp))
         self.outputs.publish_debug(pixels, result, hdr, self.params.debug_jpeg_quality)
         now = time.perf_counter()
         self.stats.processed += 1
@@ -243,7 +244,20 @@ class TrackerNode(Node):
         self.pending_init, self._restart, self._untracked = None, None, 0.0
         self.prev_pose = self.poses.at(job.frame.stamp)
         height, width = job.frame.pixels.shape[:2]
-        self.outputs.publish(job.frame.msg_header, job.result, self._intrinsics(width, height))
+        self.outputs.publish(job.frame.msg_header, job.result, self._intrinsics(width, height),
+                             self._head_motion(job.frame.stamp))
+
+    def _head_motion(self, stamp: float) -> tuple[float, tuple[float, float]] | None:
+        """(the camera's median frame period, the head's joint rates) for `track/target_rate` at a frame's
+        stamp: the head's rate from the joint states only without ego-motion compensation (with it the
+        core's velocity is the target's own); None until 5 frame intervals (and the poses) are known."""
+        period = self.stats.period(50.0)
+        if period <= 0.0:
+            return None
+        if self.params.ego_motion_compensation:
+            return period, (0.0, 0.0)
+        head = head_rate(self.poses.at, stamp, period)
+        return None if head is None else (period, head)
 
     def shift_between(self, t0: float, t1: float, width: int, height: int) -> tuple[float, float]:
         """Image shift caused by the head between two frame stamps (poses known now, at catch-up time)."""

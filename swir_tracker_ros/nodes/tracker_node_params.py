@@ -204,7 +204,7 @@ class FrameStats:
         """
         if self._last_stamp > 0 and stamp > self._last_stamp:
             dt = stamp - self._last_stamp
-            period = float(np.percentile(self._periods, 10)) if len(self._periods) >= 5 else 0.0
+            period = self.period()
             if period > 0 and dt > 10 * period:
                 dt = 0.0
             elif period > 0 and dt > 1.5 * period:
@@ -212,6 +212,10 @@ class FrameStats:
             if dt > 0:
                 self._periods.append(dt)
         self._last_stamp = stamp
+
+    def period(self, q: float = 10.0) -> float:
+        """The source's frame period (s): q-th percentile of the recent intervals; 0 until 5 are known."""
+        return float(np.percentile(self._periods, q)) if len(self._periods) >= 5 else 0.0
 
     def report(self, window_s: float) -> tuple[dict[str, object], bool]:
         """(values, trouble) for the window just ended; trouble means drops or errors happened in it."""

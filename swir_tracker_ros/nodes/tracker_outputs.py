@@ -2,8 +2,8 @@
 """The tracker node's outputs: one publisher per topic and what one frame publishes on each.
 
 Every output of a frame carries that image's stamp; `track/box` a pixel frame_id (`msg_adapters.geometry.
-pixel_frame_id`), the others the image's header. A new per-frame output (e.g. a target angular rate from
-`TrackResult.velocity`) is one more publisher here and one more line in `publish`.
+pixel_frame_id`), the others the image's header. A new per-frame output is one more publisher here and one
+more line in `publish`.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from msg_adapters.debug_image import render_debug, render_debug_compressed
 from msg_adapters.geometry import box_to_polygon, pan_tilt_error, pan_tilt_to_msg, pixel_header
 from msg_adapters.image_marker import track_markers
 from msg_adapters.qos import profile
+from msg_adapters.rate import target_rate
 from msg_adapters.track_state import track_result_to_msg, typed_state_msg
 from swir_tracker_interfaces.msg import TrackState as TrackStateMsg
 from swir_tracker_ros import topics
@@ -37,6 +38,7 @@ class TrackOutputs:
         output, debug = profile(topics.RELIABLE), profile(topics.DEBUG_IMAGE)
         self.box = node.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
         self.error = node.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
+        self.rate = node.create_publisher(Vector3Stamped, topics.TARGET_RATE, output)
         self.state = node.create_publisher(DiagnosticArray, topics.TRACK_STATE, output)
         self.typed = node.create_publisher(TrackStateMsg, topics.TRACK_STATE_TYPED, output)
         self.image_markers = node.create_publisher(ImageMarker, topics.TRACK_MARKERS, output)
@@ -45,15 +47,21 @@ class TrackOutputs:
             CompressedImage, topics.transport_topic(topics.TRACK_DEBUG_IMAGE, "compressed"), debug)
         self.frames_occluded = 0
 
-    def publish(self, header: Header, result: TrackResult | None, intr: Intrinsics) -> None:
-        """A processed frame: box (empty polygon when absent), pan/tilt error while tracking or occluded,
-        the state (both forms) and the image markers."""
+    def publish(self, header: Header, result: TrackResult | None, intr: Intrinsics,
+                motion: tuple[float, tuple[float, float]] | None = None) -> None:
+        """A processed frame: box (empty polygon when absent), pan/tilt error while tracking or occluded and,
+        with `motion` (the camera's frame period in s, the head's joint rates in rad/s, zero with ego-motion
+        compensation), the target's angular rate with the error's layout and header; the state (both forms)
+        and the image markers."""
         result = IDLE_RESULT if result is None else result
         active = result.state in ACTIVE and result.box.is_finite()
         self.box.publish(box_to_polygon(result.box if active else None, pixel_header(header)))
         if active:
             pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
             self.error.publish(pan_tilt_to_msg(pan, tilt, header))
+            if motion is not None:
+                rate = target_rate(result.box.cx, result.box.cy, result.velocity, motion[0], intr, motion[1])
+                self.rate.publish(pan_tilt_to_msg(*rate, header))
         self.publish_state(header, result, intr.width, intr.height)
         for marker in track_markers(result, header):
             self.image_markers.publish(marker)

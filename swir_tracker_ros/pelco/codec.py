@@ -100,6 +100,13 @@ class Frame:
         tilt = (1 if self.cmd2 & TILT_UP else 0) - (1 if self.cmd2 & TILT_DOWN else 0)
         return pan, self.data1 if pan else 0, tilt, self.data2 if tilt else 0
 
+    @property
+    def zoom(self) -> int:
+        """+1 tele (in), -1 wide (out), 0 none, of a standard command (0 for an extended one)."""
+        if self.extended:
+            return 0
+        return (1 if self.cmd2 & ZOOM_TELE else 0) - (1 if self.cmd2 & ZOOM_WIDE else 0)
+
 
 def standard(address: int, cmd1: int = 0, cmd2: int = 0, data1: int = 0, data2: int = 0) -> bytes:
     if _byte("cmd2", cmd2) & 0x01:
@@ -123,11 +130,18 @@ def _speed(name: str, value: int, turbo: bool) -> int:
     return _byte(name, value, 0, MAX_SPEED)
 
 
-def pan_tilt(address: int, pan_dir: int, pan_speed: int, tilt_dir: int, tilt_speed: int) -> bytes:
-    """Pan/tilt move: dir +1 = right / up, -1 = left / down, 0 = none; pan speed 0-0x3F or 0xFF (turbo)."""
-    if pan_dir not in (-1, 0, 1) or tilt_dir not in (-1, 0, 1):
-        raise PelcoError(f"directions must be -1, 0 or +1, got pan {pan_dir!r}, tilt {tilt_dir!r}")
+def pan_tilt(address: int, pan_dir: int, pan_speed: int, tilt_dir: int, tilt_speed: int, zoom: int = 0
+             ) -> bytes:
+    """Pan/tilt move: dir +1 = right / up, -1 = left / down, 0 = none; pan speed 0-0x3F or 0xFF (turbo).
+
+    `zoom` +1 tele (in), -1 wide (out), 0 none: a standard frame is the head's whole pan/tilt/lens state,
+    so a zoom that should continue while the head pans travels in the same frame.
+    """
+    if pan_dir not in (-1, 0, 1) or tilt_dir not in (-1, 0, 1) or zoom not in (-1, 0, 1):
+        raise PelcoError(f"directions must be -1, 0 or +1, got pan {pan_dir!r}, tilt {tilt_dir!r}, "
+                         f"zoom {zoom!r}")
     cmd2 = {1: PAN_RIGHT, -1: PAN_LEFT, 0: 0}[pan_dir] | {1: TILT_UP, -1: TILT_DOWN, 0: 0}[tilt_dir]
+    cmd2 |= {1: ZOOM_TELE, -1: ZOOM_WIDE, 0: 0}[zoom]
     d1 = _speed("pan speed", pan_speed, turbo=True) if pan_dir else 0
     d2 = _speed("tilt speed", tilt_speed, turbo=False) if tilt_dir else 0
     return standard(address, 0, cmd2, d1, d2)

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Angular error (rad) -> Pelco-D pan/tilt speed bytes: P/PI law, deadband, speed table, slew, limits."""
+"""Angular error (rad) and target rate (rad/s) -> Pelco-D pan/tilt speed bytes: feed-forward plus a P/PI
+law on what remains, deadband, speed table, slew, limits; joint rates (manual jog) -> speed bytes."""
 
 from __future__ import annotations
 
@@ -19,13 +20,15 @@ class MotionCommand:
     pan_speed: int = 0
     tilt_dir: int = 0
     tilt_speed: int = 0
+    zoom: int = 0  # +1 tele (in), -1 wide (out), 0 none
 
     @property
     def is_stop(self) -> bool:
-        return self.pan_dir == 0 and self.tilt_dir == 0
+        return self.pan_dir == 0 and self.tilt_dir == 0 and self.zoom == 0
 
     def to_bytes(self, address: int) -> bytes:
-        return codec.pan_tilt(address, self.pan_dir, self.pan_speed, self.tilt_dir, self.tilt_speed)
+        return codec.pan_tilt(address, self.pan_dir, self.pan_speed, self.tilt_dir, self.tilt_speed,
+                              self.zoom)
 
 
 STOP = MotionCommand()
@@ -62,7 +65,7 @@ def limit_guard(omega: float, position: float | None, lo: float, hi: float, look
 
 
 class AxisController:
-    """One joint: error (rad, our sign convention) -> (Pelco direction, speed byte)."""
+    """One joint: error (rad, our sign convention) and target rate (rad/s) -> (Pelco dir, speed byte)."""
 
     def __init__(self, table: SpeedTable, *, kp: float, ki: float, integral_limit: float, deadband: float,
                  min_byte: int, max_byte: int, max_accel: float, invert: bool, lo: float, hi: float,
@@ -75,32 +78,51 @@ class AxisController:
         self.positive_dir = -positive_pelco_dir if invert else positive_pelco_dir
         self.integral = 0.0
         self.omega = 0.0  # commanded rate after slew, rad/s (our convention)
+        self.sent_rate = 0.0  # table speed of the byte chosen last, rad/s, signed (what the head will do)
 
     def reset(self) -> None:
         self.integral = 0.0
         self.omega = 0.0
+        self.sent_rate = 0.0
 
-    def step(self, error: float, dt: float, position: float | None = None,
-             gain: float = 1.0) -> tuple[int, int]:
-        """(pelco_dir, speed_byte) for this control period; (0, 0) inside the deadband or at a limit."""
-        if not math.isfinite(error) or abs(error) < self.deadband or gain <= 0.0:
+    def step(self, error: float, dt: float, position: float | None = None, gain: float = 1.0,
+             feed_forward: float = 0.0) -> tuple[int, int]:
+        """(pelco_dir, speed_byte) for this control period: omega = feed_forward + gain * PI(error).
+
+        Inside the deadband the P/PI term is zero (and the integral reset), so the head follows the
+        feed-forward rate alone; with no feed-forward either it stops. Outside the deadband any demand
+        gets at least `min_byte` (the head creeps toward the target rather than stalling short of it).
+        """
+        if not math.isfinite(error) or not math.isfinite(feed_forward):
             self.reset()
             return 0, 0
+        if abs(error) < self.deadband or gain <= 0.0:
+            self.integral = 0.0
+            if abs(feed_forward) < 0.5 * math.radians(self.table.speed(self.min_byte)):
+                self.reset()  # nearer to standing still than to the slowest speed: stand still
+                return 0, 0
+            return self.rate(feed_forward, dt, position)
         if self.ki > 0.0:
             bound = self.integral_limit / self.ki
             self.integral = min(max(self.integral + error * dt, -bound), bound)
-        target = gain * proportional_integral(error, self.integral, self.kp, self.ki)
+        return self.rate(feed_forward + gain * proportional_integral(error, self.integral, self.kp, self.ki),
+                         dt, position)
+
+    def rate(self, target: float, dt: float, position: float | None = None) -> tuple[int, int]:
+        """(pelco_dir, speed_byte) for a demanded joint rate (rad/s): soft limits, slew, speed table."""
         target = limit_guard(target, position, self.lo, self.hi, self.lookahead)
         if target == 0.0:
             self.reset()
             return 0, 0
         self.omega = slew(self.omega, target, self.max_accel, dt)
         if self.omega * target <= 0.0:  # still reversing through zero: hold still this period
+            self.sent_rate = 0.0
             return 0, 0
         dps = math.degrees(abs(self.omega))
         byte = self.table.byte_for(dps, self.min_byte, self.max_byte)
         if self.turbo and dps >= 0.5 * (self.table.max_dps + self.table.turbo_dps):
             byte = codec.TURBO
+        self.sent_rate = math.copysign(math.radians(self.table.speed(byte)), self.omega)
         direction = self.positive_dir if self.omega > 0.0 else -self.positive_dir
         return direction, byte
 
@@ -127,7 +149,21 @@ class PanTiltController:
         self.tilt.reset()
 
     def step(self, pan_error: float, tilt_error: float, dt: float, pan: float | None = None,
-             tilt: float | None = None, gain: float = 1.0) -> MotionCommand:
-        pd, ps = self.pan.step(pan_error, dt, pan, gain)
-        td, ts = self.tilt.step(tilt_error, dt, tilt, gain)
+             tilt: float | None = None, gain: float = 1.0,
+             feed_forward: tuple[float, float] = (0.0, 0.0)) -> MotionCommand:
+        """Tracking: errors (rad) and the target's rates (rad/s, `feed_forward`) -> one pan/tilt command."""
+        pd, ps = self.pan.step(pan_error, dt, pan, gain, feed_forward[0])
+        td, ts = self.tilt.step(tilt_error, dt, tilt, gain, feed_forward[1])
         return MotionCommand(pd, ps, td, ts)
+
+    def rates(self, pan_rate: float, tilt_rate: float, dt: float, pan: float | None = None,
+              tilt: float | None = None, zoom: int = 0) -> MotionCommand:
+        """Manual jog: demanded joint rates (rad/s) -> one pan/tilt(/zoom) command."""
+        pd, ps = self.pan.rate(pan_rate, dt, pan)
+        td, ts = self.tilt.rate(tilt_rate, dt, tilt)
+        return MotionCommand(pd, ps, td, ts, zoom)
+
+    @property
+    def sent_rates(self) -> tuple[float, float]:
+        """The joint rates (rad/s) of the bytes chosen last: the head's own rate, as commanded."""
+        return self.pan.sent_rate, self.tilt.sent_rate

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Simulated Pelco-D head dynamics: speed table, acceleration limit, presets, position replies."""
+"""Simulated Pelco-D head dynamics: speed table, acceleration limit, presets, zoom, position replies."""
 
 from __future__ import annotations
 
@@ -24,6 +24,8 @@ class HeadConfig:
     tilt_min: float = -90.0  # mechanical stops, deg (our convention, up positive)
     tilt_max: float = 90.0
     command_timeout: float = 0.0  # stop after this long without a valid frame, s (0: never, like most heads)
+    zoom_max: int = 0xFFFF  # zoom position word at full tele (the 0x5D reply's scale; vendor-specific)
+    zoom_time: float = 4.0  # s from full wide to full tele at the lens's one zoom speed
 
 
 class _Joint:
@@ -60,6 +62,8 @@ class HeadModel:
         self.cfg = config
         self.pan, self.tilt = _Pan(wrap_deg(pan)), _Joint(tilt)
         self.presets: dict[int, tuple[float, float]] = {}
+        self.zoom = 0.0  # zoom position word, 0 (wide) .. cfg.zoom_max (tele)
+        self.zoom_dir = 0  # +1 tele, -1 wide, 0 none (from the last standard frame)
         self.last_frame_time = -math.inf
         self.frames = 0
         self.ignored = 0  # frames for other addresses or unsupported commands
@@ -78,6 +82,7 @@ class HeadModel:
             self.pan.goal = self.tilt.goal = None
             self.pan.target_velocity = -pan_dir * self.cfg.pan_table.speed(pan_speed)
             self.tilt.target_velocity = tilt_dir * self.cfg.tilt_table.speed(min(tilt_speed, codec.MAX_SPEED))
+            self.zoom_dir = frame.zoom
             return None
         c, w = frame.cmd2, frame.word
         if c == codec.QUERY_PAN:
@@ -87,7 +92,7 @@ class HeadModel:
             return codec.position_reply(self.cfg.address, "tilt", angle_to_raw(math.radians(self.tilt.angle),
                                                                                TILT_SIGN, 0.0))
         if c == codec.QUERY_ZOOM:
-            return codec.position_reply(self.cfg.address, "zoom", 0)
+            return codec.position_reply(self.cfg.address, "zoom", round(self.zoom))
         if c == codec.SET_PAN_POSITION and w < FULL_TURN:
             self.pan.goal = math.degrees(raw_to_angle(w, PAN_SIGN, 0.0))
         elif c == codec.SET_TILT_POSITION:
@@ -111,6 +116,10 @@ class HeadModel:
             for joint in (self.pan, self.tilt):  # continuous moves only; position moves run to their goal
                 if joint.goal is None:
                     joint.target_velocity = 0.0
+            self.zoom_dir = 0
+        if self.zoom_dir and cfg.zoom_time > 0:
+            step = self.zoom_dir * cfg.zoom_max * dt / cfg.zoom_time
+            self.zoom = min(max(self.zoom + step, 0.0), cfg.zoom_max)
         self.pan.advance(dt, cfg.max_accel, cfg.pan_table.turbo_dps)
         self.pan.angle = wrap_deg(self.pan.angle)
         self.tilt.advance(dt, cfg.max_accel, cfg.tilt_table.max_dps)

@@ -34,9 +34,12 @@ class PositionerParams:
         0.5, "re-send the current command (stop included) after this long, s; 0 = only on change", 0.0, 60.0
     )
     watchdog_timeout: float = param(
-        0.5, "stop when no /track/pan_tilt_error arrived for this long, s", 0.05, 10.0
+        0.5, "stop when no track/pan_tilt_error arrived for this long, s", 0.05, 10.0
     )
-    occluded_gain: float = param(0.5, "gain factor while the tracker reports 'occluded' (0 = stop)", 0.0, 1.0)
+    occluded_gain: float = param(
+        0.0, "P/PI gain factor on the tracker's predicted error while it reports 'occluded'; 0: the head "
+        "coasts on the target's last measured rate alone (coast_time, coast_decay)", 0.0, 1.0
+    )
     feedback_rate: float = param(10.0, "pan/tilt position query rate, Hz (0 = never query)", 0.0, 50.0)
     reply_timeout: float = param(0.25, "give up waiting for a query reply after this long, s", 0.01, 5.0)
     feedback_timeout: float = param(
@@ -46,10 +49,14 @@ class PositionerParams:
     require_feedback: bool = param(False, "refuse to move while the position is unknown")
     frame_id: str = param("", "header.frame_id of the JointState messages")
     # control law: a P/PI loop on the angular error
-    kp: float = param(1.0, "proportional gain, rad/s per rad of error", 0.0, 100.0)
+    kp: float = param(
+        2.0, "proportional gain on what the feed-forward leaves, rad/s per rad of error", 0.0, 100.0
+    )
     ki: float = param(0.0, "integral gain, rad/s per rad*s (0 = P only)", 0.0, 100.0)
     integral_limit: float = param(0.1, "bound of the integral term's contribution, rad/s", 0.0, 10.0)
-    deadband: float = param(0.005, "stop when |error| is below this, rad", 0.0, 0.5)
+    deadband: float = param(
+        0.0005, "no P/PI correction when |error| is below this (the feed-forward still runs), rad", 0.0, 0.5
+    )
     min_speed_byte: int = param(1, "slowest speed byte used outside the deadband", 1, 63)
     max_speed_byte: int = param(63, "fastest speed byte (0x3F)", 1, 63)
     allow_turbo: bool = param(False, "use pan turbo (0xFF) when the demand is past the table's top speed")
@@ -90,6 +97,51 @@ class PositionerParams:
     limit_lookahead: float = param(
         0.3, "block motion that would cross a soft limit within this many seconds, s", 0.0, 5.0
     )
+    # who owns the head, joint names (docs/positioner.md "Modes", "Control surface")
+    initial_mode: str = param(
+        "tracking", "mode at start (unmanaged) or on activate (managed); tracking follows the tracker",
+        choices=("idle", "tracking", "manual", "released"),
+    )
+    pan_joint: str = param("pan", "name of the pan joint in joint states, jogs and moves")
+    tilt_joint: str = param("tilt", "name of the tilt joint in joint states, jogs and moves")
+    zoom_joint: str = param("zoom", "name of the zoom joint in joint states (position 0 wide to 1 tele)")
+    # following a moving target (tracking mode)
+    feed_forward: float = param(
+        1.0, "gain on the target's angular rate (track/target_rate) added to the speed command; 0 = P/PI",
+        0.0, 2.0,
+    )
+    max_input_age: float = param(
+        0.3, "an error or rate older than this (its camera frame to now) gets no feed-forward, s", 0.01, 5.0
+    )
+    error_prediction_max: float = param(
+        0.25, "carry a fresh error forward to now over at most this much of its age (target minus head "
+        "rate), s; 0 = off", 0.0, 1.0,
+    )
+    lead_limit: float = param(
+        0.003, "the feed-forward fades out as the head gets ahead of the tracked target, to zero at this "
+        "lead, rad (the target is stopping faster than its measured rate says); 0 = off", 0.0, 0.1,
+    )
+    coast_time: float = param(
+        1.0, "while the tracker reports 'occluded', keep feeding the target's last measured rate forward "
+        "this long, s", 0.0, 10.0,
+    )
+    coast_decay: float = param(1.0, "then fade the feed-forward out over this long, s", 0.0, 10.0)
+    # manual control (positioner/jog, positioner/move, presets, zoom)
+    jog_timeout: float = param(
+        0.5, "dead-man: the jog stops when no positioner/jog arrived for this long, s", 0.05, 5.0
+    )
+    move_tolerance: float = param(
+        0.002, "a move is complete when every joint is within this of its goal and still, rad", 0.0002, 0.1
+    )
+    move_timeout: float = param(
+        30.0, "a move or preset not complete after this long is aborted, s", 0.5, 600.0
+    )
+    zoom_feedback: bool = param(
+        False, "also query the zoom position (heads that answer 0x55) and publish it as the zoom joint"
+    )
+    zoom_word_max: int = param(
+        65535, "zoom position word at full tele: the zoom joint's position is word / zoom_word_max", 1, 65535
+    )
 
     def validate(self) -> PositionerParams:
         """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`); returns self."""
@@ -125,6 +177,10 @@ class PositionerParams:
             )
             if problem:
                 raise ParameterError(f"{axis}_speed_table / speed_table_bytes: {problem}")
+        names = (self.pan_joint, self.tilt_joint, self.zoom_joint)
+        if not all(n.strip() for n in names) or len(set(names)) != 3:
+            raise ParameterError(f"pan_joint, tilt_joint and zoom_joint must be distinct, non-empty names, "
+                                 f"got {list(names)}")
         if 0 < self.keepalive_period < 1.0 / self.control_rate:
             raise ParameterError(
                 f"keepalive_period {self.keepalive_period} is shorter than one control "

@@ -58,6 +58,7 @@ class Simulator:
             address=args.address, pan_table=SpeedTable(xs, pan_dps, args.turbo_speed),
             tilt_table=SpeedTable(xs, tilt_dps, max(tilt_dps[-1], 0.0)), max_accel=args.max_accel,
             tilt_min=args.tilt_min, tilt_max=args.tilt_max, command_timeout=args.command_timeout,
+            zoom_time=args.zoom_time,
         )
         self.head = HeadModel(cfg, args.initial_pan, args.initial_tilt)
         self.transport = TcpTransport(args.tcp) if args.tcp is not None else PtyTransport(args.link)
@@ -71,6 +72,7 @@ class Simulator:
         self.running = True
         self.disconnect_requested = False
         self.frame_log = open(args.frame_log, "w") if args.frame_log else None  # noqa: SIM115
+        self.wire_log = open(args.wire_log, "w") if args.wire_log else None  # noqa: SIM115
 
     def _on_signal(self, signum: int, _frame) -> None:
         if signum == signal.SIGUSR1:
@@ -137,8 +139,9 @@ class Simulator:
             if trace_fh:
                 self._trace(writer, trace_fh)
                 trace_fh.close()
-            if self.frame_log is not None:
-                self.frame_log.close()
+            for fh in (self.frame_log, self.wire_log):
+                if fh is not None:
+                    fh.close()
             print(f"STATS frames={self.head.frames} checksum_errors={self.decoder.checksum_errors} "
                   f"discarded={self.decoder.discarded} dropped={self.faults.dropped} "
                   f"corrupted={self.faults.corrupted}", flush=True)
@@ -152,7 +155,11 @@ class Simulator:
             ready = []
         now = time.monotonic()
         for fd in ready:
-            data = self.faults.mangle(self.transport.readable(fd))
+            raw = self.transport.readable(fd)
+            if raw and self.wire_log is not None:
+                self.wire_log.write(f"{time.time():.4f} {raw.hex()}\n")
+                self.wire_log.flush()
+            data = self.faults.mangle(raw)
             for frame in self.decoder.feed(data):
                 self.inbound.append((now + self.faults.latency, frame))
                 if self.frame_log is not None:
@@ -217,6 +224,11 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--frame-log", type=Path, default=None,
                     help="append every valid frame received: '<unix time> <address> <cmd1> <cmd2> <data1> "
                     "<data2>' (hex bytes), flushed per frame")
+    ap.add_argument("--wire-log", type=Path, default=None,
+                    help="append every chunk of bytes read from the line, valid or not: '<unix time> <hex>', "
+                    "flushed per chunk (what the controller put on the bus)")
+    ap.add_argument("--zoom-time", type=float, default=4.0,
+                    help="s from full wide to full tele (zoom position words 0-65535)")
     ap.add_argument("--trace-period", type=float, default=0.02, help="trace row period, s")
     ap.add_argument("--duration", type=float, default=0.0,
                     help="exit after this long, s (0 = run until killed)")
