@@ -14,11 +14,14 @@ mean intensity plus a soft intensity histogram, standing in for the reference co
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from functools import lru_cache
+from types import ModuleType
 
 import numpy as np
 
+from swir_tracker_ros.core import fhog as fhog_mod
 from swir_tracker_ros.core.channels import intensity_channels
 from swir_tracker_ros.core.eco.fourier import centred_spectrum
 from swir_tracker_ros.core.fhog import N_CHANNELS, fhog
@@ -47,13 +50,32 @@ def cosine_window(ny: int, nx: int) -> np.ndarray:
     return np.outer(np.hanning(ny + 2)[1:-1], np.hanning(nx + 2)[1:-1]).astype(np.float32)
 
 
+@lru_cache(maxsize=1)
+def _kernels() -> ModuleType | None:
+    try:
+        return importlib.import_module("swir_tracker_ros.core.eco.kernels")
+    except ImportError:
+        return None
+
+
+def compiled() -> ModuleType | None:
+    """core/eco/kernels.py (numba loops) when numba is importable and `fhog.USE_JIT` is on, else None."""
+    return _kernels() if fhog_mod.USE_JIT else None
+
+
 def block_features(patches: np.ndarray, spec: BlockSpec) -> np.ndarray:
     """Raw feature maps (N, C, rows, cols) float32 of sample patches (N, H, W) in [0, 1]; H, W multiples of
     the cell."""
     if spec.kind == "hog":
         return fhog(patches, spec.cell, soft=True)
     if spec.kind == "intensity":
-        return intensity_channels(patches, spec.cell, spec.bins)
+        jit = compiled()
+        if jit is None:
+            return intensity_channels(patches, spec.cell, spec.bins)
+        n, h, w = patches.shape
+        out = np.empty((n, 1 + spec.bins, h // spec.cell, w // spec.cell), dtype=np.float32)
+        jit.intensity_cells_kernel(np.ascontiguousarray(patches, dtype=np.float32), spec.cell, spec.bins, out)
+        return out
     raise ValueError(f"unknown ECO feature block {spec.kind!r}; expected one of {BLOCK_KINDS}")
 
 
@@ -83,8 +105,10 @@ def pca_projection(x: np.ndarray, dim: int) -> np.ndarray:
 
 
 def project(x: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """ECO eq. 3's P^T x on feature maps (..., C, rows, cols) -> (..., D, rows, cols)."""
-    return np.einsum("cd,...chw->...dhw", p, x, optimize=True)
+    """ECO eq. 3's P^T x on feature maps or spectra (..., C, rows, cols) -> (..., D, rows, cols)."""
+    *lead, c, h, w = x.shape
+    out = np.matmul(p.T.astype(x.dtype), x.reshape(*lead, c, h * w))
+    return out.reshape(*lead, p.shape[1], h, w)
 
 
 def spectra(blocks: list[np.ndarray], a: float) -> list[np.ndarray]:

@@ -13,8 +13,8 @@ Conventions used by every ECO module:
   is smallest at 0 (the reference code keeps the top-left corner as origin; both are the same model).
 - Spectra are stored as HALF spectra: rows ky = -K..K (centred, 2K + 1 rows), columns kx = 0..Kx. For a real
   signal the other half follows from X^[-k] = conj(X^[k]). An even N or M is made odd as the reference
-  code's `filter_sz = feature_sz + (feature_sz + 1) % 2`; here the Nyquist coefficient is split in two equal
-  halves at -N/2 and +N/2, so that the band-limited interpolant still passes through the samples.
+  code's `filter_sz = feature_sz + (feature_sz + 1) % 2`: the interpolated signal has a coefficient at -N/2
+  AND at +N/2, both X[N/2] b^[+-N/2] (the DFT is N-periodic), with their own phases about the centre.
 - Inner products over the full spectrum are `2 Re sum(conj(a) b) - Re sum over the column kx = 0`.
 """
 
@@ -90,18 +90,15 @@ def interp_factors(n: int, a: float = -0.75) -> np.ndarray:
 def centred_spectrum(x: np.ndarray, a: float = -0.75) -> np.ndarray:
     """Interpolated half spectrum (..., 2K + 1, Kx + 1) complex64 of real maps (..., N, M) (C-COT eq. 4).
 
-    rfft2 (unnormalised, as the reference code's fft2), rows reordered to ky = -K..K, an even axis's Nyquist
-    coefficient split between -N/2 and +N/2, then multiplied by the per-axis interpolation factors.
+    rfft2 (unnormalised, as the reference code's fft2), rows reordered to ky = -K..K (an even axis's Nyquist
+    row used for -N/2 and +N/2), then multiplied by the per-axis interpolation factors: these are exactly the
+    Fourier coefficients |k| <= K of the kernel-interpolated signal J{x} over the period of N cells.
     """
     n, m = x.shape[-2:]
     xf = sfft.rfft2(x, axes=(-2, -1), workers=1)
     xf = np.fft.fftshift(xf, axes=-2)
-    if n % 2 == 0:  # rows -N/2 .. N/2 - 1 -> -N/2 .. N/2, the Nyquist row halved on both sides
+    if n % 2 == 0:  # rows -N/2 .. N/2 - 1 -> -N/2 .. N/2: the DFT is N-periodic, X[N/2] = X[-N/2]
         xf = np.concatenate([xf, xf[..., :1, :]], axis=-2)
-        xf[..., 0, :] *= 0.5
-        xf[..., -1, :] *= 0.5
-    if m % 2 == 0:  # the column kx = M/2 stands for +-M/2 in the half spectrum: half of it each
-        xf[..., -1] *= 0.5
     fy = interp_factors(n, a)
     fx = interp_factors(m, a)[half_size(m) :]
     return (xf * (fy[:, None] * fx[None, :])).astype(np.complex64)

@@ -26,7 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swir_tracker_ros.core.eco.features import compiled
 from swir_tracker_ros.core.eco.fourier import half_inner, symmetrise
+from swir_tracker_ros.core.fhog import corr_jit
 from swir_tracker_ros.core.eco.regularisation import RegOperator
 
 Vec = list[np.ndarray]
@@ -119,14 +121,32 @@ def scores(f: Vec, xs: Vec, geo: Geometry) -> np.ndarray:
     """sum_b embed(sum_d f_b^d X_b^d) for a batch of samples xs_b (L, D, rows, cols): (L, ny, nx)."""
     n = xs[0].shape[0]
     out = np.zeros((n, geo.ny, geo.nx), dtype=np.complex64)
+    cj = corr_jit()
     for b, (fb, xb) in enumerate(zip(f, xs)):
-        out[:, geo.rows[b], : geo.cols[b]] += np.einsum("ldyx,dyx->lyx", xb, fb)
+        if cj is not None and xb.flags.c_contiguous:  # sum_d x conj(conj f): the KCF channel-sum loop
+            d, ny, nx = fb.shape
+            s = np.empty((n, ny * nx), dtype=np.complex64)
+            cj.channel_sum_kernel(xb.reshape(n, d, ny * nx), np.conj(fb).reshape(d, ny * nx), s)
+            out[:, geo.rows[b], : geo.cols[b]] += s.reshape(n, ny, nx)
+        else:
+            out[:, geo.rows[b], : geo.cols[b]] += np.einsum("ldyx,dyx->lyx", xb, fb)
     return out
 
 
 def adjoint(s: np.ndarray, xs: Vec, geo: Geometry) -> Vec:
     """A^H: per block sum_l conj(X_l^d) s_l on the block's frequencies."""
-    return [np.conj(np.einsum("ldyx,lyx->dyx", xb, np.conj(geo.crop(s, b)))) for b, xb in enumerate(xs)]
+    jit = compiled()
+    out = []
+    for b, xb in enumerate(xs):
+        sb = geo.crop(s, b)
+        if jit is not None and xb.flags.c_contiguous:
+            n, d, ny, nx = xb.shape
+            o = np.empty((d, ny * nx), dtype=np.complex64)
+            jit.adjoint_kernel(xb.reshape(n, d, ny * nx), np.ascontiguousarray(sb).reshape(n, ny * nx), o)
+            out.append(o.reshape(d, ny, nx))
+        else:
+            out.append(np.conj(np.einsum("ldyx,lyx->dyx", xb, np.conj(sb))))
+    return out
 
 
 def preconditioner(energy: Vec, regs: list[RegOperator], data_w: float, reg_w: float) -> Vec:

@@ -101,10 +101,9 @@ class SampleSpace:
         n = self.count
         if n == 0:
             return g
-        for s, x in zip(self.samples, xs):
-            flat = s[:n].reshape(n, -1)
-            g[:n] += 2.0 * (np.conj(flat) @ x.reshape(-1)).real
-            g[:n] -= (np.conj(s[:n, ..., 0].reshape(n, -1)) @ x[..., 0].reshape(-1)).real
+        for s, x in zip(self.samples, xs):  # Re sum conj(mu) x = Re sum mu conj(x): conjugate the one sample
+            g[:n] += 2.0 * (s[:n].reshape(n, -1) @ np.conj(x.reshape(-1))).real
+            g[:n] -= (s[:n, ..., 0].reshape(n, -1) @ np.conj(x[..., 0].reshape(-1))).real
         return g
 
     def add(self, xs: list[np.ndarray]) -> Update:
