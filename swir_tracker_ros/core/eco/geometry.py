@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Image-sample geometry of the ECO filter: how large the sample is, on which cell grids, at which resolution.
 
-The sample covers `search_area_scale` times the target (square of side sqrt(w h) x scale, or proportional);
+The sample covers `search_area_scale` times the target (square of side sqrt(w h) x scale, or proportional),
+and at least `min_search_side` image pixels (ours: a small target that moves a few of its sizes between
+frames stays inside the sample);
 its resolution is chosen so that its area lies within [min_sample_size^2, max_sample_size^2] sample pixels
 (ECO-HC `min/max_image_sample_size`): a small target is resampled up, a large one down. The support (the
 sample's side in sample pixels, the period T of every feature block) is a multiple of every block's cell, so
@@ -51,7 +53,10 @@ def _round_support(side: float, step: int) -> int:
 def sample_geometry(w: float, h: float, p: ECOParams) -> SampleGeometry:
     """Sample geometry for a first-frame target of w x h image pixels."""
     blocks = feature_blocks(p)
-    area = w * h * p.search_area_scale**2
+    ratio = p.search_area_scale
+    if p.min_search_side > 0:  # small targets: the sample covers at least this many image pixels (ours)
+        ratio = max(ratio, p.min_search_side / math.sqrt(w * h))
+    area = w * h * ratio**2
     if area > p.max_sample_size**2:
         scale = math.sqrt(area / p.max_sample_size**2)
     elif area < p.min_sample_size**2:
@@ -60,8 +65,8 @@ def sample_geometry(w: float, h: float, p: ECOParams) -> SampleGeometry:
         scale = 1.0
     bw, bh = w / scale, h / scale
     if p.search_area_shape == "square":
-        sy = sx = math.sqrt(bw * bh) * p.search_area_scale
+        sy = sx = math.sqrt(bw * bh) * ratio
     else:
-        sy, sx = bh * p.search_area_scale, bw * p.search_area_scale
+        sy, sx = bh * ratio, bw * ratio
     step = math.lcm(*(b.cell for b in blocks))
     return SampleGeometry(scale, (bh, bw), (_round_support(sy, step), _round_support(sx, step)), blocks)

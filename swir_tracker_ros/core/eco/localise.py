@@ -46,25 +46,28 @@ def evaluate(sf: np.ndarray, u: float, v: float) -> float:
     return float((np.exp(1j * ky * u) @ a @ np.exp(1j * kx * v)).real)
 
 
-def newton(sf: np.ndarray, u: float, v: float, iterations: int) -> tuple[float, float, float]:
-    """Newton's method for a maximum of s from (u, v); returns (u, v, s(u, v)) (C-COT Sec. 3.3)."""
+def newton(sf: np.ndarray, u: np.ndarray, v: np.ndarray, iterations: int) -> tuple[np.ndarray, ...]:
+    """Newton's method for maxima of a batch of scores (S, 2K + 1, Kx + 1) from (u, v) (S,) each (C-COT Sec.
+    3.3): returns (u, v, s(u, v)), each (S,). A member whose Hessian is singular keeps its last point."""
     a, ky, kx = _terms(sf)
+    u, v = np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
     for _ in range(iterations):
-        ey, ex = np.exp(1j * ky * u), np.exp(1j * kx * v)
-        ay, ax = a @ ex, ey @ a  # (rows,), (cols,)
-        gu = (1j * ky * ey) @ ay
-        gv = ax @ (1j * kx * ex)
-        huu = (-(ky**2) * ey) @ ay
-        hvv = ax @ (-(kx**2) * ex)
-        huv = (1j * ky * ey) @ a @ (1j * kx * ex)
-        g = np.array([gu.real, gv.real])
-        h = np.array([[huu.real, huv.real], [huv.real, hvv.real]])
-        det = h[0, 0] * h[1, 1] - h[0, 1] ** 2
-        if not np.isfinite(det) or abs(det) < 1e-20:
-            break
-        step = np.linalg.solve(h, g)
-        u, v = u - float(step[0]), v - float(step[1])
-    return u, v, evaluate(sf, u, v)
+        ey, ex = np.exp(1j * np.outer(u, ky)), np.exp(1j * np.outer(v, kx))  # (S, rows), (S, cols)
+        ay = np.einsum("syx,sx->sy", a, ex)  # s^ summed over columns: (S, rows)
+        ax = np.einsum("sy,syx->sx", ey, a)
+        gu = np.einsum("sy,sy->s", 1j * ky * ey, ay).real
+        gv = np.einsum("sx,sx->s", ax, 1j * kx * ex).real
+        huu = np.einsum("sy,sy->s", -(ky**2) * ey, ay).real
+        hvv = np.einsum("sx,sx->s", ax, -(kx**2) * ex).real
+        huv = np.einsum("sy,syx,sx->s", 1j * ky * ey, a, 1j * kx * ex).real
+        det = huu * hvv - huv**2
+        ok = np.isfinite(det) & (np.abs(det) > 1e-20)
+        safe = np.where(ok, det, 1.0)
+        u = np.where(ok, u - (hvv * gu - huv * gv) / safe, u)
+        v = np.where(ok, v - (huu * gv - huv * gu) / safe, v)
+    ey, ex = np.exp(1j * np.outer(u, ky)), np.exp(1j * np.outer(v, kx))
+    val = np.einsum("sy,syx,sx->s", ey, a, ex).real
+    return u, v, val
 
 
 def _wrap(u: float) -> float:
@@ -75,24 +78,22 @@ def _wrap(u: float) -> float:
 def localise(sf: np.ndarray, iterations: int, exclusion: int) -> tuple[int, Peak, np.ndarray]:
     """Best of a batch of score spectra (S, 2K + 1, Kx + 1): (index, its peak, its sampled response).
 
-    Each is sampled on the (2K + 1) x (2Kx + 1) grid, its grid maximum refined by `iterations` Newton steps; the
-    batch member with the highest refined score wins (reference: the scale of the translation search)."""
+    Each is sampled on the (2K + 1) x (2Kx + 1) grid, its grid maximum refined by `iterations` Newton steps
+    (a refinement that ends lower is dropped); the member with the highest score wins (reference: the scale
+    of the translation search)."""
+    n = sf.shape[0]
     ny, nx = sf.shape[-2], 2 * (sf.shape[-1] - 1) + 1
     grids = sample_grid(sf, ny, nx)
-    best: tuple[float, int, float, float] | None = None
-    for i in range(sf.shape[0]):
-        r, c = divmod(int(np.argmax(grids[i])), nx)
-        g = float(grids[i, r, c])
-        u0 = 2.0 * math.pi * (r if r <= ny // 2 else r - ny) / ny
-        v0 = 2.0 * math.pi * (c if c <= nx // 2 else c - nx) / nx
-        u, v, val = newton(sf[i], u0, v0, iterations) if iterations > 0 else (u0, v0, g)
-        if not np.isfinite(val) or val < g:
-            u, v, val = u0, v0, g
-        if best is None or val > best[0]:
-            best = (val, i, _wrap(u), _wrap(v))
-    assert best is not None
-    val, i, u, v = best
+    idx = grids.reshape(n, -1).argmax(axis=1)
+    r, c = np.divmod(idx, nx)
+    g = grids.reshape(n, -1)[np.arange(n), idx].astype(np.float64)
+    u0 = 2.0 * math.pi * np.where(r <= ny // 2, r, r - ny) / ny
+    v0 = 2.0 * math.pi * np.where(c <= nx // 2, c, c - nx) / nx
+    u, v, val = newton(sf, u0, v0, iterations) if iterations > 0 else (u0, v0, g)
+    worse = ~np.isfinite(val) | (val < g)
+    u, v, val = np.where(worse, u0, u), np.where(worse, v0, v), np.where(worse, g, val)
+    i = int(np.argmax(val))
     resp = grids[i]
-    r, c = divmod(int(np.argmax(resp)), nx)
-    peak = Peak(u / (2 * math.pi), v / (2 * math.pi), val, psr(resp, r, c, exclusion), apce(resp))
+    peak = Peak(_wrap(float(u[i])) / (2 * math.pi), _wrap(float(v[i])) / (2 * math.pi), float(val[i]),
+                psr(resp, int(r[i]), int(c[i]), exclusion), apce(resp))
     return i, peak, resp

@@ -29,6 +29,9 @@ class ECOParams:
     search_area_shape: str = _f(
         "square", "square (ECO-HC: side sqrt(w h) x scale) or proportional", choices=("square", "proportional")
     )
+    min_search_side: float = _f(
+        0.0, "(ours) the image sample's side is at least this many image pixels (small targets); 0: off", 0.0, 2000.0
+    )
     min_sample_size: int = _f(150, "smaller samples are resampled up to this side (px; ECO-HC 150^2 area)", 24, 1000)
     max_sample_size: int = _f(200, "larger samples are resampled down to this side (px; ECO-HC 200^2 area)", 24, 1000)
     # features (ECO-HC gray: FHOG cell 6 -> 10 dims, intensity channels cell 4 -> 3 dims)
