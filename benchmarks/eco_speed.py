@@ -62,8 +62,13 @@ print(json.dumps({"times": times, "cpu": time.process_time() - c0}))
 
 def summarise(times: list[float], cpu: float) -> dict:
     t = np.asarray(times) * 1e3
-    return {"fps": len(t) / (t.sum() / 1e3), "cpu_fps": len(t) / cpu, "p50_ms": float(np.percentile(t, 50)),
-            "p95_ms": float(np.percentile(t, 95)), "max_ms": float(t.max())}
+    return {
+        "fps": len(t) / (t.sum() / 1e3),
+        "cpu_fps": len(t) / cpu,
+        "p50_ms": float(np.percentile(t, 50)),
+        "p95_ms": float(np.percentile(t, 95)),
+        "max_ms": float(t.max()),
+    }
 
 
 def time_eco(frames: np.ndarray, box: tuple[float, ...], estimator: str = "dsst") -> dict:
@@ -107,10 +112,23 @@ def time_port(frames8: np.ndarray, box: tuple[float, ...]) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "frames8.npy")
         np.save(path, frames8)
-        env = dict(os.environ, PYTHONPATH="", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+        env = dict(
+            os.environ, PYTHONPATH="", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1"
+        )
         proc = subprocess.run(
-            [str(py), "-c", PORT_CHILD, path, ",".join(str(v) for v in box), os.path.join(tmp, "stub"), str(checkout)],
-            capture_output=True, text=True, env=env, check=False,
+            [
+                str(py),
+                "-c",
+                PORT_CHILD,
+                path,
+                ",".join(str(v) for v in box),
+                os.path.join(tmp, "stub"),
+                str(checkout),
+            ],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=False,
         )
     if proc.returncode != 0:
         print(proc.stderr[-2000:], file=sys.stderr)
@@ -137,22 +155,34 @@ def main() -> None:
     root = Path(args.sequences)
     names = args.names.split(",") if args.names else sorted(p.name for p in root.iterdir() if p.is_dir())
     rows, total = [], {"eco": [0, 0.0], "eco_search": [0, 0.0], "port": [0, 0.0]}
-    print(f"{'sequence':22s} {'frames':>6s} {'ECO dsst':>9s} {'ECO search':>10s} {'ECO-HC port':>11s}  (CPU fps)")
+    print(
+        f"{'sequence':22s} {'frames':>6s} {'ECO dsst':>9s} {'ECO search':>10s} {'ECO-HC port':>11s}",
+        "(CPU fps)",
+    )
     for name in names:
         frames, box = load_sequence(root / name, args.frames)
-        res = {"eco": time_eco(frames, box, "dsst"), "eco_search": time_eco(frames, box, "search"),
-               "port": time_port(frames, box)}
+        res = {
+            "eco": time_eco(frames, box, "dsst"),
+            "eco_search": time_eco(frames, box, "search"),
+            "port": time_port(frames, box),
+        }
         n = len(frames) - 1
         for k, r in res.items():
             if r:
                 total[k][0] += n
                 total[k][1] += n / r["cpu_fps"]
-        cells = [f"{res[k]['cpu_fps']:>9.1f}" if res[k] else f"{'-':>9s}" for k in ("eco", "eco_search", "port")]
+        cells = [
+            f"{res[k]['cpu_fps']:>9.1f}" if res[k] else f"{'-':>9s}" for k in ("eco", "eco_search", "port")
+        ]
         print(f"{name:22s} {n:6d} {cells[0]} {cells[1]:>10s} {cells[2]:>11s}")
         rows.append({"sequence": name, "frames": n, **{k: v.get("cpu_fps") for k, v in res.items()}})
     summary = {k: (v[0] / v[1] if v[1] else None) for k, v in total.items()}
-    print(f"{'all (frames / CPU s)':22s} {'':6s} " + " ".join(
-        f"{summary[k]:>9.1f}" if summary[k] else f"{'-':>9s}" for k in ("eco", "eco_search", "port")))
+    print(
+        f"{'all (frames / CPU s)':22s} {'':6s} "
+        + " ".join(
+            f"{summary[k]:>9.1f}" if summary[k] else f"{'-':>9s}" for k in ("eco", "eco_search", "port")
+        )
+    )
     print(json.dumps({"cpu_fps": summary, "sequences": rows}))
 
 

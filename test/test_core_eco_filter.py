@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
@@ -46,10 +47,12 @@ def test_first_frame_gauss_newton_lowers_the_joint_loss(crossing: tuple[list[np.
     losses = filt.init_losses
     assert len(losses) == filt.params.init_gn_iter
     assert losses[-1] < 0.8 * losses[0]
-    assert all(b <= a * 1.001 for a, b in zip(losses, losses[1:]))
+    assert all(b <= a * 1.001 for a, b in itertools.pairwise(losses))
 
 
-def test_projection_reduces_channels_and_stays_near_orthonormal(crossing: tuple[list[np.ndarray], Box]) -> None:
+def test_projection_reduces_channels_and_stays_near_orthonormal(
+    crossing: tuple[list[np.ndarray], Box],
+) -> None:
     frames, box = crossing
     filt = ECOFilter(ECOParams())
     filt.init(frames[0], box)
@@ -59,7 +62,9 @@ def test_projection_reduces_channels_and_stays_near_orthonormal(crossing: tuple[
     assert sv.min() > 0.3 and sv.max() / sv.min() < 5.0  # PCA start (orthonormal), then Gauss-Newton steps
 
 
-def test_conjugate_gradient_lowers_the_loss_and_warm_start_helps(crossing: tuple[list[np.ndarray], Box]) -> None:
+def test_conjugate_gradient_lowers_the_loss_and_warm_start_helps(
+    crossing: tuple[list[np.ndarray], Box],
+) -> None:
     frames, box = crossing
     p = ECOParams(scale_estimator="none", skip_after_frame=1, train_gap=100)  # no optimisation in update
     filt = ECOFilter(p)
@@ -115,7 +120,9 @@ def test_uint16_frames_are_conditioned(crossing: tuple[list[np.ndarray], Box]) -
     assert out.iou(box) > 0.6
 
 
-def test_detect_windows_finds_the_target_from_a_neighbouring_window(crossing: tuple[list[np.ndarray], Box]) -> None:
+def test_detect_windows_finds_the_target_from_a_neighbouring_window(
+    crossing: tuple[list[np.ndarray], Box],
+) -> None:
     frames, box = crossing
     filt = ECOFilter(ECOParams())
     filt.init(frames[0], box)

@@ -31,7 +31,8 @@ BLOCK_KINDS = ("hog", "intensity")
 
 @dataclass(frozen=True)
 class BlockSpec:
-    """One feature block: kind, cell size in sample pixels, compressed dimension D, histogram bins (intensity)."""
+    """One feature block: kind, cell size in sample pixels, compressed dimension D, histogram bins
+    (intensity)."""
 
     kind: str
     cell: int
@@ -46,7 +47,8 @@ class BlockSpec:
 
 @lru_cache(maxsize=32)
 def cosine_window(ny: int, nx: int) -> np.ndarray:
-    """Hann window of n + 2 points with its two zero ends dropped, outer product (ny, nx) float32 (reference)."""
+    """Hann window of n + 2 points with its two zero ends dropped, outer product (ny, nx) float32
+    (reference)."""
     return np.outer(np.hanning(ny + 2)[1:-1], np.hanning(nx + 2)[1:-1]).astype(np.float32)
 
 
@@ -95,8 +97,10 @@ def extract(patches: np.ndarray, specs: tuple[BlockSpec, ...]) -> list[np.ndarra
 
 
 def pca_projection(x: np.ndarray, dim: int) -> np.ndarray:
-    """Initial projection matrix P (C, D) of a block (C, rows, cols): the D leading eigenvectors of the channel
-    covariance of the mean-free cells (ECO Sec. 3.1: P initialised by PCA, reference `proj_init_method` pca)."""
+    """Initial projection matrix P (C, D) of a block (C, rows, cols): the D leading eigenvectors of the
+    channel
+    covariance of the mean-free cells (ECO Sec. 3.1: P initialised by PCA, reference `proj_init_method`
+    pca)."""
     c = x.shape[0]
     flat = x.reshape(c, -1).astype(np.float64)
     flat = flat - flat.mean(axis=1, keepdims=True)

@@ -62,7 +62,8 @@ class ECODetection:
 
 def dsst_params(p: ECOParams) -> DSSTParams:
     """The fDSST scale filter of ECO-HC as core/scale.py's DSST: 17 samples spanning the 33 interpolated
-    scales (step 1.02^(33/17)), label sigma 33/16 interpolated steps, response interpolated 8 points a step."""
+    scales (step 1.02^(33/17)), label sigma 33/16 interpolated steps, response interpolated 8 points a
+    step."""
     ratio = p.scale_filter_interp / p.scale_filter_scales
     sigma_steps = p.scale_filter_interp * p.scale_sigma_factor / ratio
     return DSSTParams(
@@ -96,7 +97,9 @@ class ECOFilter:
         self.scale_factor = g.scale
         ih, iw = frame.shape[:2]
         step = p.search_step if p.scale_estimator == "search" else p.scale_filter_step
-        self.min_scale = step ** math.ceil(math.log(max(5.0 / g.support[0], 5.0 / g.support[1])) / math.log(step))
+        self.min_scale = step ** math.ceil(
+            math.log(max(5.0 / g.support[0], 5.0 / g.support[1])) / math.log(step)
+        )
         self.max_scale = step ** math.floor(math.log(min(ih / g.base[0], iw / g.base[1])) / math.log(step))
         shapes = [g.grid(b) for b in range(len(g.blocks))]
         self.ks = [(half_size(n), half_size(m)) for n, m in shapes]
@@ -105,8 +108,9 @@ class ECOFilter:
         kmax = max(self.ks)
         y = gaussian_label(kmax[0], kmax[1], sigma, sigma, (float(g.support[0]), float(g.support[1])))
         self.yf = [self.out.crop(y, b) for b in range(len(shapes))]
-        wf = reg_window_spectrum(g.support, g.base, p.reg_window_min, p.reg_window_edge, p.reg_window_power,
-                                 p.reg_sparsity)
+        wf = reg_window_spectrum(
+            g.support, g.base, p.reg_window_min, p.reg_window_edge, p.reg_window_power, p.reg_sparsity
+        )
         w2 = squared_kernel(wf)
         self.regs = [RegOperator(w2, ky, kx) for ky, kx in self.ks]
         self.multipliers = self._multipliers()
@@ -118,7 +122,16 @@ class ECOFilter:
         m_diag = opt.preconditioner(energy0, self.regs, p.precond_data, p.precond_reg)
         cg = max(1, math.ceil(p.init_cg_iter / p.init_gn_iter))
         self.hf, self.proj, self.init_losses = opt.train_joint(
-            xf, self.proj, self.yf, self.regs, self.out, m_diag, p.projection_reg, p.precond_proj, p.init_gn_iter, cg
+            xf,
+            self.proj,
+            self.yf,
+            self.regs,
+            self.out,
+            m_diag,
+            p.projection_reg,
+            p.precond_proj,
+            p.init_gn_iter,
+            cg,
         )
         z = [feat.project(x, pb) for x, pb in zip(xf, self.proj)]
         self.space = SampleSpace([zb.shape for zb in z], p.n_samples, p.learning_rate)
@@ -163,7 +176,8 @@ class ECOFilter:
     # --- detection ----------------------------------------------------------------------------------------
 
     def _patches(self, frame: np.ndarray, center: tuple[float, float], mults: list[float]) -> np.ndarray:
-        """Image samples (len(mults), rows, cols) float32 centred on `center`, support x scale x each factor."""
+        """Image samples (len(mults), rows, cols) float32 centred on `center`, support x scale x each
+        factor."""
         sy, sx = self.geo.support
         out = np.empty((len(mults), sy, sx), dtype=np.float32)
         for i, m in enumerate(mults):
@@ -181,7 +195,7 @@ class ECOFilter:
         """PSR exclusion zone in response cells (`psr_exclusion` x the target, at least 3, odd)."""
         cell = self.geo.support[1] / (2 * max(self.ks)[1] + 1)
         n = self.params.psr_exclusion * math.sqrt(self.geo.base[0] * self.geo.base[1]) / cell
-        return max(3, 2 * int(round(n / 2)) + 1)
+        return max(3, 2 * round(n / 2) + 1)
 
     def detect(
         self,
@@ -211,8 +225,19 @@ class ECOFilter:
         s = self._clamp(s0 * factor)
         window = Box.from_center(c[0], c[1], ex, ey)
         sample = [zb[i] for zb in z]
-        return ECODetection(cx, cy, self.geo.base[1] * s, self.geo.base[0] * s, s / s0, peak.value, peak.psr,
-                            peak.apce, window, sample, (ey, ex))
+        return ECODetection(
+            cx,
+            cy,
+            self.geo.base[1] * s,
+            self.geo.base[0] * s,
+            s / s0,
+            peak.value,
+            peak.psr,
+            peak.apce,
+            window,
+            sample,
+            (ey, ex),
+        )
 
     def detect_windows(self, frame: np.ndarray, centers: list[tuple[float, float]]) -> list[ECODetection]:
         """One detection per window centre at the current size, features of all windows in one batch; no
@@ -231,14 +256,31 @@ class ECOFilter:
         for i, (cx, cy) in enumerate(centers):
             _, peak, _ = localise(sf[i : i + 1], self.params.newton_iterations, self._exclusion())
             ey, ex = sy * s, sx * s
-            out.append(ECODetection(cx + peak.tx * ex, cy + peak.ty * ey, w, h, 1.0, peak.value, peak.psr,
-                                    peak.apce, Box.from_center(cx, cy, ex, ey), [zb[i] for zb in z], (ey, ex)))
+            out.append(
+                ECODetection(
+                    cx + peak.tx * ex,
+                    cy + peak.ty * ey,
+                    w,
+                    h,
+                    1.0,
+                    peak.value,
+                    peak.psr,
+                    peak.apce,
+                    Box.from_center(cx, cy, ex, ey),
+                    [zb[i] for zb in z],
+                    (ey, ex),
+                )
+            )
         return out
 
     # --- update -------------------------------------------------------------------------------------------
 
     def update(
-        self, frame: np.ndarray, det: ECODetection, learn: bool = True, center: tuple[float, float] | None = None
+        self,
+        frame: np.ndarray,
+        det: ECODetection,
+        learn: bool = True,
+        center: tuple[float, float] | None = None,
     ) -> None:
         """Move to the detection (or to `center` with the detection's size) and, if `learn`, add its sample
         centred there to the sample space and optimise on schedule (ECO Sec. 3.2-3.3)."""
@@ -250,7 +292,10 @@ class ECOFilter:
         p = self.params
         ty = (c[1] - det.window.cy) / det.extent[0]
         tx = (c[0] - det.window.cx) / det.extent[1]
-        z = [zb * shift_phase(ky, kx, 2 * math.pi * ty, 2 * math.pi * tx) for zb, (ky, kx) in zip(det.sample, self.ks)]
+        z = [
+            zb * shift_phase(ky, kx, 2 * math.pi * ty, 2 * math.pi * tx)
+            for zb, (ky, kx) in zip(det.sample, self.ks)
+        ]
         self.space.add(z)
         self.frame += 1
         if self.frame < p.skip_after_frame or self.since_train >= p.train_gap:
@@ -260,8 +305,16 @@ class ECOFilter:
             forget = 0.0 if p.cg_forgetting_rate == math.inf else (1.0 - lr) ** p.cg_forgetting_rate
             n = self.space.count
             self.hf, self.cg_state, _ = opt.train_filter(
-                self.hf, [s[:n] for s in self.space.samples], self.space.weights[:n], self.yf, self.regs, self.out,
-                m_diag, p.cg_iter, self.cg_state, forget,
+                self.hf,
+                [s[:n] for s in self.space.samples],
+                self.space.weights[:n],
+                self.yf,
+                self.regs,
+                self.out,
+                m_diag,
+                p.cg_iter,
+                self.cg_state,
+                forget,
             )
             self.since_train = 0
         else:

@@ -35,7 +35,8 @@ def half_size(n: int) -> int:
 def _poly_cos_integral(coeffs: tuple[float, ...], lo: float, hi: float, omega: np.ndarray) -> np.ndarray:
     """Exact integral over [lo, hi] of sum_j coeffs[j] x^j cos(omega x), vectorised over omega.
 
-    Repeated integration by parts: I_n = x^n sin(wx) / w - n / w J_{n-1}, J_n = -x^n cos(wx) / w + n / w I_{n-1};
+    Repeated integration by parts: I_n = x^n sin(wx) / w - n / w J_{n-1}, J_n = -x^n cos(wx) / w + n / w
+    I_{n-1};
     omega = 0 is the plain polynomial integral.
     """
     w = np.asarray(omega, dtype=np.float64)
@@ -66,9 +67,11 @@ def _poly_cos_integral(coeffs: tuple[float, ...], lo: float, hi: float, omega: n
 
 
 def cubic_kernel_ft(f: np.ndarray, a: float = -0.75) -> np.ndarray:
-    """Continuous Fourier transform B(f) of the cubic convolution (Keys) kernel with parameter `a` (f in cycles
+    """Continuous Fourier transform B(f) of the cubic convolution (Keys) kernel with parameter `a` (f in
+    cycles
     per sample spacing): b(x) = (a+2)|x|^3 - (a+3)|x|^2 + 1 on |x| <= 1, a|x|^3 - 5a|x|^2 + 8a|x| - 4a on
-    1 < |x| < 2 (C-COT Sec. 3.1, the kernel the ECO reference configuration uses). B is real and even; B(0) = 1.
+    1 < |x| < 2 (C-COT Sec. 3.1, the kernel the ECO reference configuration uses). B is real and even; B(0) =
+    1.
     """
     omega = 2.0 * math.pi * np.asarray(f, dtype=np.float64)
     inner = _poly_cos_integral((1.0, 0.0, -(a + 3.0), a + 2.0), 0.0, 1.0, omega)
@@ -78,7 +81,8 @@ def cubic_kernel_ft(f: np.ndarray, a: float = -0.75) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def interp_factors(n: int, a: float = -0.75) -> np.ndarray:
-    """Per-axis factor for a block of n cells: b^[k] = B(k / n) / n (C-COT eq. 4, kernel spacing one cell, period
+    """Per-axis factor for a block of n cells: b^[k] = B(k / n) / n (C-COT eq. 4, kernel spacing one cell,
+    period
     n cells) times the phase exp(2 pi i k c / n), c = (n - 1) / 2, that moves the origin to the sample centre;
     k = -K..K (complex128, 2K + 1 values)."""
     K = half_size(n)
@@ -104,8 +108,11 @@ def centred_spectrum(x: np.ndarray, a: float = -0.75) -> np.ndarray:
     return (xf * (fy[:, None] * fx[None, :])).astype(np.complex64)
 
 
-def gaussian_label(k_y: int, k_x: int, sigma_y: float, sigma_x: float, period: tuple[float, float]) -> np.ndarray:
-    """Half spectrum (2 k_y + 1, k_x + 1) of the periodic Gaussian label of standard deviation sigma (same units
+def gaussian_label(
+    k_y: int, k_x: int, sigma_y: float, sigma_x: float, period: tuple[float, float]
+) -> np.ndarray:
+    """Half spectrum (2 k_y + 1, k_x + 1) of the periodic Gaussian label of standard deviation sigma (same
+    units
     as the period), by the Poisson summation formula: y^[k] = sqrt(2 pi) sigma / T exp(-2 (pi sigma k / T)^2)
     per axis (C-COT Sec. 3.2; the reference code's label)."""
     ky = np.arange(-k_y, k_y + 1, dtype=np.float64)
@@ -117,7 +124,8 @@ def gaussian_label(k_y: int, k_x: int, sigma_y: float, sigma_x: float, period: t
 
 
 def shift_phase(k_y: int, k_x: int, dy: float, dx: float) -> np.ndarray:
-    """Half-spectrum factor exp(i (ky dy + kx dx)) (dy, dx in radians of the period: 2 pi shift / T) that moves
+    """Half-spectrum factor exp(i (ky dy + kx dx)) (dy, dx in radians of the period: 2 pi shift / T) that
+    moves
     a signal by -shift: multiplying X^ by it maps x(t) to x(t + shift), i.e. content at `shift` to the centre
     (the reference code's `shift_sample`)."""
     ky = np.arange(-k_y, k_y + 1, dtype=np.float64)

@@ -44,7 +44,8 @@ def feature_blocks(p: ECOParams) -> tuple[BlockSpec, ...]:
 
 
 def _round_support(side: float, step: int) -> int:
-    """The smallest multiple of `step` not below `side` (at least 3 steps): every block tiles the sample exactly;
+    """The smallest multiple of `step` not below `side` (at least 3 steps): every block tiles the sample
+    exactly;
     rounding up keeps the sample at least `min_sample_size` (the reference rounds to the nearest odd multiple
     of its largest cell, 150 -> 162 px at ECO-HC's minimum; here 150 -> 156)."""
     return max(3 * step, step * math.ceil(side / step - 1e-9))

@@ -94,6 +94,11 @@ def localise(sf: np.ndarray, iterations: int, exclusion: int) -> tuple[int, Peak
     u, v, val = np.where(worse, u0, u), np.where(worse, v0, v), np.where(worse, g, val)
     i = int(np.argmax(val))
     resp = grids[i]
-    peak = Peak(_wrap(float(u[i])) / (2 * math.pi), _wrap(float(v[i])) / (2 * math.pi), float(val[i]),
-                psr(resp, int(r[i]), int(c[i]), exclusion), apce(resp))
+    peak = Peak(
+        _wrap(float(u[i])) / (2 * math.pi),
+        _wrap(float(v[i])) / (2 * math.pi),
+        float(val[i]),
+        psr(resp, int(r[i]), int(c[i]), exclusion),
+        apce(resp),
+    )
     return i, peak, resp

@@ -14,7 +14,8 @@ Sec. 3.3 "N_CG iterations every N_S frames", reference `CG_forgetting_rate`). Th
 Filter and projection on the first frame (ECO eq. 4-7): E(f, P) = || z^T P f - y ||^2 + sum_c ||w * f^c||^2
 + lambda ||P||_F^2 is minimised by Gauss-Newton: at (f_i, P_i) the residual is linearised (ECO eq. 5)
     z^T P_i f_{i+1} + (f_i (x) z)^T vec(dP) - y,
-and each linear least-squares problem in (f_{i+1}, dP) (ECO eq. 6) is solved by a few CG iterations (ECO eq. 7;
+and each linear least-squares problem in (f_{i+1}, dP) (ECO eq. 6) is solved by a few CG iterations (ECO eq.
+7;
 Fletcher-Reeves, restarted every Gauss-Newton step, reference code). dP is real; its normal-equation part sums
 over the whole spectrum, 2 Re(half) - Re(column kx = 0).
 """
@@ -28,15 +29,16 @@ import numpy as np
 
 from swir_tracker_ros.core.eco.features import compiled
 from swir_tracker_ros.core.eco.fourier import half_inner, symmetrise
-from swir_tracker_ros.core.fhog import corr_jit
 from swir_tracker_ros.core.eco.regularisation import RegOperator
+from swir_tracker_ros.core.fhog import corr_jit
 
 Vec = list[np.ndarray]
 
 
 @dataclass
 class CGState:
-    """The last search direction and rho of a CG run, for the warm start of the next (reference `CG_state`)."""
+    """The last search direction and rho of a CG run, for the warm start of the next (reference
+    `CG_state`)."""
 
     p: Vec
     rho: float
@@ -84,10 +86,8 @@ def pcg(
         if p is None:
             p = z
         else:
-            if fletcher_reeves or r_prev is None:
-                beta = rho / rho1
-            else:
-                beta = (rho - ip(r_prev, z)) / rho1
+            fr = fletcher_reeves or r_prev is None
+            beta = rho / rho1 if fr else (rho - ip(r_prev, z)) / rho1  # type: ignore[arg-type]
             if not np.isfinite(beta):
                 break
             p = _axpy(max(beta, 0.0), p, z)
@@ -152,9 +152,9 @@ def adjoint(s: np.ndarray, xs: Vec, geo: Geometry) -> Vec:
 def preconditioner(energy: Vec, regs: list[RegOperator], data_w: float, reg_w: float) -> Vec:
     """Diagonal M = (1 - reg_w)(data_w E + (1 - data_w) mean_d E) + reg_w ||w^||^2 per block (reference)."""
     return [
-        ((1.0 - reg_w) * (data_w * e + (1.0 - data_w) * e.mean(axis=0, keepdims=True)) + reg_w * r.energy).astype(
-            np.float32
-        )
+        (
+            (1.0 - reg_w) * (data_w * e + (1.0 - data_w) * e.mean(axis=0, keepdims=True)) + reg_w * r.energy
+        ).astype(np.float32)
         for e, r in zip(energy, regs)
     ]
 
@@ -186,6 +186,45 @@ def train_filter(
     return pcg(apply_a, rhs, f, precond, inner, maxit, state, forget)
 
 
+class _JointSystem:
+    """The Gauss-Newton step's normal equations in (f, dP) at the linearisation point (f0, P) (ECO eq. 6)."""
+
+    def __init__(
+        self, x: Vec, p: list[np.ndarray], f0: Vec, regs: list[RegOperator], geo: Geometry, proj_reg: float
+    ) -> None:
+        self.x, self.f0, self.regs, self.geo, self.proj_reg = x, f0, regs, geo, proj_reg
+        self.z = [np.einsum("cd,cyx->dyx", pb, xb) for pb, xb in zip(p, x)]  # P_i^T x
+        self.nb = len(x)
+
+    def apply(self, v: Vec) -> Vec:
+        """[A^H (A f + B dP) + W^H W f ; B^H (A f + B dP) + lambda dP]."""
+        fv, dp = v[: self.nb], v[self.nb :]
+        geo = self.geo
+        r = scores(fv, [zb[None] for zb in self.z], geo)[0]  # A f
+        bp = [np.einsum("cd,cyx->dyx", d, xb) for d, xb in zip(dp, self.x)]  # dP^T x
+        r = r + scores(self.f0, [q[None] for q in bp], geo)[0]  # + B dP
+        out_f = [
+            np.conj(zb) * geo.crop(r, b) + reg.apply(fv[b])
+            for b, (zb, reg) in enumerate(zip(self.z, self.regs))
+        ]
+        out_p = [
+            _proj_adjoint(xb, f0b, geo.crop(r, b)) + self.proj_reg * d
+            for b, (xb, f0b, d) in enumerate(zip(self.x, self.f0, dp))
+        ]
+        return out_f + out_p
+
+    def rhs(self, yf: Vec, p: list[np.ndarray]) -> Vec:
+        """[A^H y ; B^H y - lambda P]."""
+        out = [np.conj(zb) * yb for zb, yb in zip(self.z, yf)]
+        return out + [
+            _proj_adjoint(xb, f0b, yb) - self.proj_reg * pb for xb, f0b, yb, pb in zip(self.x, self.f0, yf, p)
+        ]
+
+    def inner(self, a: Vec, b: Vec) -> float:
+        nb = self.nb
+        return inner(a[:nb], b[:nb]) + sum(float(np.vdot(u, v).real) for u, v in zip(a[nb:], b[nb:]))
+
+
 def train_joint(
     x: Vec,
     p: list[np.ndarray],
@@ -201,36 +240,30 @@ def train_joint(
     """Gauss-Newton on (f, P) for the first sample x (un-projected half spectra (C, rows, cols) per block),
     from f = 0 and the PCA projection p (ECO eq. 4-7). Returns the filter, the projection matrices and the
     loss after each Gauss-Newton step."""
+    nb = len(x)
     total_c = sum(xb.shape[0] for xb in x)
     # reference: proj_precond (2 sum |y^|^2 / sum C + lambda) for every entry of a block's P
     m_p = [np.float32(proj_precond * (2.0 * half_inner(yb, yb) / total_c + proj_reg)) for yb in yf]
+
+    def precond(v: Vec) -> Vec:
+        return [vb / mb for vb, mb in zip(v[:nb], m_diag)] + [d / mp for d, mp in zip(v[nb:], m_p)]
+
     f = [np.zeros((pb.shape[1], *xb.shape[1:]), dtype=np.complex64) for pb, xb in zip(p, x)]
     losses = []
     for _ in range(gn_iter):
-        z = [np.einsum("cd,cyx->dyx", pb, xb) for pb, xb in zip(p, x)]  # P_i^T x
-        f0 = [fb.copy() for fb in f]
-        nb = len(x)
-
-        def apply_a(v: Vec, z: Vec = z, f0: Vec = f0) -> Vec:
-            fv, dp = v[:nb], v[nb:]
-            r = scores(fv, [zb[None] for zb in z], geo)[0]  # A f
-            bp = [np.einsum("cd,cyx->dyx", d, xb) for d, xb in zip(dp, x)]  # dP^T x
-            r = r + scores(f0, [q[None] for q in bp], geo)[0]  # + B dP
-            out_f = [np.conj(zb) * geo.crop(r, b) + reg.apply(fv[b]) for b, (zb, reg) in enumerate(zip(z, regs))]
-            out_p = [_proj_adjoint(xb, f0b, geo.crop(r, b)) + proj_reg * d for b, (xb, f0b, d) in enumerate(zip(x, f0, dp))]
-            return out_f + out_p
-
-        rhs = [np.conj(zb) * yb for zb, yb in zip(z, yf)]
-        rhs += [_proj_adjoint(xb, f0b, yb) - proj_reg * pb for xb, f0b, yb, pb in zip(x, f0, yf, p)]
-
-        def precond(v: Vec) -> Vec:
-            return [vb / mb for vb, mb in zip(v[:nb], m_diag)] + [d / mp for d, mp in zip(v[nb:], m_p)]
-
-        def ip(a: Vec, b: Vec) -> float:
-            return inner(a[:nb], b[:nb]) + sum(float(np.vdot(u, v).real) for u, v in zip(a[nb:], b[nb:]))
-
+        system = _JointSystem(x, p, [fb.copy() for fb in f], regs, geo, proj_reg)
         v0 = f + [np.zeros_like(pb) for pb in p]
-        v, _, _ = pcg(apply_a, rhs, v0, precond, ip, cg_iter, None, 1.0, fletcher_reeves=True)
+        v, _, _ = pcg(
+            system.apply,
+            system.rhs(yf, p),
+            v0,
+            precond,
+            system.inner,
+            cg_iter,
+            None,
+            1.0,
+            fletcher_reeves=True,
+        )
         f = [symmetrise(vb) for vb in v[:nb]]
         p = [pb + d.real.astype(np.float32) for pb, d in zip(p, v[nb:])]
         losses.append(joint_loss(x, p, f, yf, regs, geo, proj_reg))
@@ -238,14 +271,17 @@ def train_joint(
 
 
 def _proj_adjoint(xb: np.ndarray, f0b: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """B^H r for one block: [c, d] = sum over the whole spectrum of Re(conj(x^c f0^d) r) (half: 2 Re - col 0)."""
+    """B^H r for one block: [c, d] = sum over the whole spectrum of Re(conj(x^c f0^d) r) (half: 2 Re - col
+    0)."""
     t = np.conj(f0b) * r[None]  # (D, rows, cols)
     full = 2.0 * np.einsum("cyx,dyx->cd", np.conj(xb), t).real
     col0 = np.einsum("cy,dy->cd", np.conj(xb[..., 0]), t[..., 0]).real
     return (full - col0).astype(np.float32)
 
 
-def filter_loss(f: Vec, xs: Vec, weights: np.ndarray, yf: Vec, regs: list[RegOperator], geo: Geometry) -> float:
+def filter_loss(
+    f: Vec, xs: Vec, weights: np.ndarray, yf: Vec, regs: list[RegOperator], geo: Geometry
+) -> float:
     """E(f) of C-COT eq. 10 / ECO eq. 9 (full-spectrum norms), for tests and diagnostics."""
     s = scores(f, xs, geo)
     y = np.zeros((geo.ny, geo.nx), dtype=np.complex64)

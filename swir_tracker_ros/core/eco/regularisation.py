@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Spatial regularisation of the filter in the Fourier domain (SRDCF, Danelljan et al., ICCV 2015; C-COT eq. 10-12).
+"""Spatial regularisation of the filter in the Fourier domain (SRDCF, Danelljan et al., ICCV 2015; C-COT eq.
+10-12).
 
 The filter's energy away from the target is penalised by a window w(t) that is smallest on the target and
 grows quadratically outward: w(t) = w_min + (w_edge - w_min) (|ty / sy|^p + |tx / sx|^p), s = half the target
 size (the reference code's `get_reg_filter`, p = 2). The term ||w f||^2 of the loss becomes, with the Fourier
-coefficients w^ of w, ||w^ * f^||^2 (C-COT eq. 10, `*` a discrete convolution of coefficient sequences), and the
+coefficients w^ of w, ||w^ * f^||^2 (C-COT eq. 10, `*` a discrete convolution of coefficient sequences), and
+the
 normal equations need W^H W f^ = w^ * (w^ * f^) (C-COT eq. 12). w^ is made sparse: coefficients below
 `sparsity` x the largest are dropped, then the DC is raised so that the sparse window's minimum is w_min again
 (reference code). With the origin at the sample centre (core/eco/fourier.py) w^ is real and even.
@@ -67,7 +69,9 @@ class RegOperator:
         self.ry, self.rx = half_size(w2.shape[0]), half_size(w2.shape[1])
         taps = np.argwhere(w2 != 0.0)
         self.taps = [(int(a) - self.ry, int(b) - self.rx, np.float32(w2[a, b])) for a, b in taps]
-        self.energy = float(np.sum(w2[self.ry, self.rx]))  # w2^[0] = sum w^2 = ||w^||^2, for the preconditioner
+        self.energy = float(
+            np.sum(w2[self.ry, self.rx])
+        )  # w2^[0] = sum w^2 = ||w^||^2, for the preconditioner
 
     def apply(self, f: np.ndarray) -> np.ndarray:
         """out[ky, kx] = sum_{dy, dx} w2^[dy, dx] f^[ky - dy, kx - dx] for the filter's own (ky, kx)."""

@@ -131,7 +131,11 @@ class SampleSpace:
                 for s in self.samples:
                     s[a] = ta * s[a] + (1.0 - ta) * s[b]
                 ga = ta * self.gram[:, a] + (1.0 - ta) * self.gram[:, b]
-                gaa = ta * ta * self.gram[a, a] + (1.0 - ta) ** 2 * self.gram[b, b] + 2 * ta * (1 - ta) * self.gram[a, b]
+                gaa = (
+                    ta * ta * self.gram[a, a]
+                    + (1.0 - ta) ** 2 * self.gram[b, b]
+                    + 2 * ta * (1 - ta) * self.gram[a, b]
+                )
                 g[a] = ta * g[a] + (1.0 - ta) * g[b]
                 self._set_gram(a, ga, gaa)
             k = plan.new_id

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""`ECOTracker`: the ECO base filter as a plain short-term tracker, `init(frame, box)` / `update(frame) -> box`.
+"""`ECOTracker`: the ECO base filter as a plain short-term tracker, `init(frame, box)` / `update(frame) ->
+box`.
 
 Every frame is detected at the last position and size and learned from (no gate, no failure report): the
 tracker the ECO papers evaluate, used to measure the base filter on its own (docs/eco.md). Frames go through
@@ -19,9 +20,13 @@ from swir_tracker_ros.types import Box
 class ECOTracker:
     """Short-term ECO tracker; `last` is the last frame's detection (peak, PSR, APCE) for diagnostics."""
 
-    def __init__(self, params: ECOParams | None = None, conditioning: ConditioningConfig | None = None) -> None:
+    def __init__(
+        self, params: ECOParams | None = None, conditioning: ConditioningConfig | None = None
+    ) -> None:
         self.filter = ECOFilter(params)
-        self.conditioner = FrameConditioner(conditioning if conditioning is not None else ConditioningConfig())
+        self.conditioner = FrameConditioner(
+            conditioning if conditioning is not None else ConditioningConfig()
+        )
         self.last: ECODetection | None = None
 
     def init(self, frame: np.ndarray, box: Box) -> None:
