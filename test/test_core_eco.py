@@ -122,3 +122,15 @@ def test_sample_space_merges_the_closest_pair_and_keeps_weights_summing_to_one()
     # the Gram matrix stays the inner products of the stored means
     g = np.array([[fo.half_inner(a, b) for b in space2.samples[0]] for a in space2.samples[0]])
     assert np.allclose(space2.gram, g, rtol=1e-4)
+
+
+def test_compiled_intensity_channels_equal_the_core_ones() -> None:
+    from swir_tracker_ros.core.channels import intensity_channels
+    from swir_tracker_ros.core.eco.features import BlockSpec, block_features, compiled
+
+    assert compiled() is not None  # numba is a runtime dependency: the compiled path is the one in use
+    rng = np.random.default_rng(5)
+    patches = rng.random((3, 36, 44)).astype(np.float32)
+    for bins in (0, 4):
+        out = block_features(patches, BlockSpec("intensity", 4, 3, bins))
+        assert np.allclose(out, intensity_channels(patches, 4, bins), atol=1e-6)

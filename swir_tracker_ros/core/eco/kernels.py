@@ -31,27 +31,27 @@ def intensity_cells_kernel(patches: np.ndarray, cell: int, bins: int, out: np.nd
     """Cell means of the intensity minus 0.5 (channel 0) and of the soft `bins`-bin histogram memberships
     (channels 1..bins) of (N, H, W) patches in [0, 1]: the channels of `core.channels.intensity_channels`.
 
-    A pixel at t = clip(v bins - 0.5, 0, bins - 1) gives 1 - (t - floor t) to bin floor(t) and the rest to
-    the next bin; out (N, 1 + bins, H // cell, W // cell) float32."""
+    A pixel at t = clip(v bins - 0.5, 0, bins - 1) belongs to bin b with weight max(0, 1 - |t - b|) (the two
+    nearest bins share it linearly); out (N, 1 + bins, H // cell, W // cell) float32. Row by row into a
+    per-cell-row accumulator (contiguous reads, branch-free weights)."""
     n, h, w = patches.shape
     hc, wc = h // cell, w // cell
     inv = np.float32(1.0) / np.float32(cell * cell)
-    acc = np.zeros(1 + bins, dtype=np.float32)
+    acc = np.zeros((1 + bins, wc), dtype=np.float32)
+    top = np.float32(bins - 1)
     for k in range(n):
         for i in range(hc):
+            acc[:, :] = 0.0
+            for y in range(i * cell, (i + 1) * cell):
+                for x in range(wc * cell):
+                    j = x // cell
+                    v = patches[k, y, x]
+                    acc[0, j] += v
+                    t = min(max(v * bins - np.float32(0.5), np.float32(0.0)), top)
+                    for b in range(bins):
+                        acc[1 + b, j] += max(np.float32(0.0), np.float32(1.0) - abs(t - np.float32(b)))
             for j in range(wc):
-                acc[:] = 0.0
-                for y in range(i * cell, (i + 1) * cell):
-                    for x in range(j * cell, (j + 1) * cell):
-                        v = patches[k, y, x]
-                        acc[0] += v
-                        t = v * bins - np.float32(0.5)
-                        t = min(max(t, np.float32(0.0)), np.float32(bins - 1))
-                        lo = int(t)
-                        f = t - lo
-                        acc[1 + lo] += np.float32(1.0) - f
-                        if lo + 1 < bins:
-                            acc[2 + lo] += f
-                out[k, 0, i, j] = acc[0] * inv - np.float32(0.5)
-                for b in range(bins):
-                    out[k, 1 + b, i, j] = acc[1 + b] * inv
+                out[k, 0, i, j] = acc[0, j] * inv - np.float32(0.5)
+            for b in range(bins):
+                for j in range(wc):
+                    out[k, 1 + b, i, j] = acc[1 + b, j] * inv

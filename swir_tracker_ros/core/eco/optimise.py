@@ -87,7 +87,7 @@ def pcg(
             p = z
         else:
             fr = fletcher_reeves or r_prev is None
-            beta = rho / rho1 if fr else (rho - ip(r_prev, z)) / rho1  # type: ignore[arg-type]
+            beta = rho / rho1 if fr or r_prev is None else (rho - ip(r_prev, z)) / rho1
             if not np.isfinite(beta):
                 break
             p = _axpy(max(beta, 0.0), p, z)
