@@ -92,7 +92,7 @@ def test_localise_finds_a_sub_cell_peak() -> None:
     sf = fo.gaussian_label(K, K, 2.0, 2.0, (float(n), float(n))) * fo.shift_phase(
         K, K, -2 * math.pi * ty, -2 * math.pi * tx
     )
-    i, peak, resp = localise(sf[None], 5, 3)
+    i, peak, resp, _ = localise(sf[None], 5, 3)
     assert i == 0 and resp.shape == (n, n)
     assert peak.ty * n == pytest.approx(3.3, abs=0.02) and peak.tx * n == pytest.approx(-5.6, abs=0.02)
     assert peak.value == pytest.approx(1.0, abs=0.01) and peak.psr > 5

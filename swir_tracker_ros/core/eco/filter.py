@@ -27,7 +27,7 @@ from swir_tracker_ros.core.eco import features as feat
 from swir_tracker_ros.core.eco import optimise as opt
 from swir_tracker_ros.core.eco.fourier import gaussian_label, half_size, shift_phase
 from swir_tracker_ros.core.eco.geometry import SampleGeometry, sample_geometry
-from swir_tracker_ros.core.eco.localise import localise
+from swir_tracker_ros.core.eco.localise import localise, vertex_offset
 from swir_tracker_ros.core.eco.params import ECOParams
 from swir_tracker_ros.core.eco.regularisation import RegOperator, reg_window_spectrum, squared_kernel
 from swir_tracker_ros.core.eco.sample_space import SampleSpace
@@ -214,8 +214,10 @@ class ECOFilter:
         finally:
             self.scale_factor = saved
         z = self._project(raw)
-        i, peak, _ = localise(self._score(z), self.params.newton_iterations, self._exclusion())
+        i, peak, _, vals = localise(self._score(z), self.params.newton_iterations, self._exclusion())
         m = self.multipliers[i]
+        if self.params.search_interp and 0 < i < len(vals) - 1:  # (ours) between the searched resolutions
+            m *= self.params.search_step ** vertex_offset(vals[i - 1], vals[i], vals[i + 1])
         ey, ex = self.geo.support[0] * s0 * m, self.geo.support[1] * s0 * m
         cx, cy = c[0] + peak.tx * ex, c[1] + peak.ty * ey
         factor = m
@@ -254,7 +256,7 @@ class ECOFilter:
         out = []
         w, h = self.size
         for i, (cx, cy) in enumerate(centers):
-            _, peak, _ = localise(sf[i : i + 1], self.params.newton_iterations, self._exclusion())
+            _, peak, _, _ = localise(sf[i : i + 1], self.params.newton_iterations, self._exclusion())
             ey, ex = sy * s, sx * s
             out.append(
                 ECODetection(

@@ -70,13 +70,23 @@ def newton(sf: np.ndarray, u: np.ndarray, v: np.ndarray, iterations: int) -> tup
     return u, v, val
 
 
+def vertex_offset(left: float, centre: float, right: float) -> float:
+    """Offset in [-0.5, 0.5] of the vertex of the parabola through three equally spaced values (0 if the
+    centre is not a maximum of a concave parabola)."""
+    curv = left - 2.0 * centre + right
+    if not curv < 0.0:
+        return 0.0
+    return float(min(max(0.5 * (left - right) / curv, -0.5), 0.5))
+
+
 def _wrap(u: float) -> float:
     """Angle in [-pi, pi)."""
     return (u + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def localise(sf: np.ndarray, iterations: int, exclusion: int) -> tuple[int, Peak, np.ndarray]:
-    """Best of a batch of score spectra (S, 2K + 1, Kx + 1): (index, its peak, its sampled response).
+def localise(sf: np.ndarray, iterations: int, exclusion: int) -> tuple[int, Peak, np.ndarray, np.ndarray]:
+    """Best of a batch of score spectra (S, 2K + 1, Kx + 1): (index, its peak, its sampled response, the
+    refined peak value of every member).
 
     Each is sampled on the (2K + 1) x (2Kx + 1) grid, its grid maximum refined by `iterations` Newton steps
     (a refinement that ends lower is dropped); the member with the highest score wins (reference: the scale
@@ -101,4 +111,4 @@ def localise(sf: np.ndarray, iterations: int, exclusion: int) -> tuple[int, Peak
         psr(resp, int(r[i]), int(c[i]), exclusion),
         apce(resp),
     )
-    return i, peak, resp
+    return i, peak, resp, val

@@ -115,6 +115,11 @@ class ECOParams:
     search_step: float = _f(
         1.02, "size ratio of neighbouring search resolutions (reference: 1.01)", 1.001, 1.2
     )
+    search_interp: bool = _f(
+        False,
+        "(ours) search: the size between resolutions, from a parabola through the best one's and its "
+        "neighbours' peaks (log-scale); off: the best resolution",
+    )
     # confidence of the response (ours)
     psr_exclusion: float = _f(
         0.5,
