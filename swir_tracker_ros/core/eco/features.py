@@ -38,6 +38,7 @@ class BlockSpec:
     cell: int
     dim: int
     bins: int = 0
+    soft: bool = True  # FHOG orientation binning
 
     @property
     def channels(self) -> int:
@@ -69,7 +70,7 @@ def block_features(patches: np.ndarray, spec: BlockSpec) -> np.ndarray:
     """Raw feature maps (N, C, rows, cols) float32 of sample patches (N, H, W) in [0, 1]; H, W multiples of
     the cell."""
     if spec.kind == "hog":
-        return fhog(patches, spec.cell, soft=True)
+        return fhog(patches, spec.cell, soft=spec.soft)
     if spec.kind == "intensity":
         jit = compiled()
         if jit is None:

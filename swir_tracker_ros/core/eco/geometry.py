@@ -37,7 +37,7 @@ class SampleGeometry:
 
 def feature_blocks(p: ECOParams) -> tuple[BlockSpec, ...]:
     """The blocks the parameters ask for: FHOG, and intensity channels unless intensity_cell is 0."""
-    blocks = [BlockSpec("hog", p.hog_cell, p.hog_dim)]
+    blocks = [BlockSpec("hog", p.hog_cell, p.hog_dim, soft=p.hog_soft)]
     if p.intensity_cell > 0:
         blocks.append(BlockSpec("intensity", p.intensity_cell, p.intensity_dim, p.intensity_bins))
     return tuple(blocks)

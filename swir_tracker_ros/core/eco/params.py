@@ -49,6 +49,12 @@ class ECOParams:
     )
     # features (ECO-HC gray: FHOG cell 6 -> 10 dims, intensity channels cell 4 -> 3 dims)
     hog_cell: int = _f(6, "FHOG cell in sample pixels (ECO-HC 6)", 2, 16)
+    hog_soft: bool = _f(
+        True,
+        "FHOG orientation binning: soft (linear between the two nearest of 18 bins, core/fhog.py "
+        "'hog_soft') or hard (nearest bin: Piotr Dollar's fhog with softBin -1, which ECO-HC's features "
+        "call, interpolates in space only)",
+    )
     hog_dim: int = _f(10, "FHOG channels after the projection P (ECO-HC 10 of 31)", 1, 31)
     intensity_cell: int = _f(
         4, "intensity channels' cell in sample pixels (ECO-HC 4); 0: no intensity block", 0, 16
