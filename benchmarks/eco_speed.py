@@ -30,6 +30,9 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from core_speed import summarise  # noqa: E402  (fps, cpu_fps, p50 / p95 / max ms: one definition)
 
 PORT_CHILD = r"""
 import json, os, sys, time
@@ -58,17 +61,6 @@ for f in frames[1:]:
     times.append(time.perf_counter() - t0)
 print(json.dumps({"times": times, "cpu": time.process_time() - c0}))
 """
-
-
-def summarise(times: list[float], cpu: float) -> dict:
-    t = np.asarray(times) * 1e3
-    return {
-        "fps": len(t) / (t.sum() / 1e3),
-        "cpu_fps": len(t) / cpu,
-        "p50_ms": float(np.percentile(t, 50)),
-        "p95_ms": float(np.percentile(t, 95)),
-        "max_ms": float(t.max()),
-    }
 
 
 def time_eco(frames: np.ndarray, box: tuple[float, ...], estimator: str = "dsst") -> dict:
