@@ -100,12 +100,24 @@ def centred_spectrum(x: np.ndarray, a: float = -0.75) -> np.ndarray:
     """
     n, m = x.shape[-2:]
     xf = sfft.rfft2(x, axes=(-2, -1), workers=1)
-    xf = np.fft.fftshift(xf, axes=-2)
-    if n % 2 == 0:  # rows -N/2 .. N/2 - 1 -> -N/2 .. N/2: the DFT is N-periodic, X[N/2] = X[-N/2]
-        xf = np.concatenate([xf, xf[..., :1, :]], axis=-2)
+    # rows in the order ky = -K..K (an even axis's Nyquist row X[N/2] = X[-N/2] used at both ends)
+    xf = np.take(xf, _centred_rows(n), axis=-2)
+    return xf * _factors(n, m, a)
+
+
+@lru_cache(maxsize=64)
+def _centred_rows(n: int) -> np.ndarray:
+    """FFT row index of each centred row ky = -K..K."""
+    K = half_size(n)
+    return np.arange(-K, K + 1) % n
+
+
+@lru_cache(maxsize=64)
+def _factors(n: int, m: int, a: float) -> np.ndarray:
+    """Outer product of the row and column interpolation factors (2K + 1, Kx + 1), complex64."""
     fy = interp_factors(n, a)
     fx = interp_factors(m, a)[half_size(m) :]
-    return (xf * (fy[:, None] * fx[None, :])).astype(np.complex64)
+    return (fy[:, None] * fx[None, :]).astype(np.complex64)
 
 
 def gaussian_label(

@@ -51,22 +51,25 @@ def newton(sf: np.ndarray, u: np.ndarray, v: np.ndarray, iterations: int) -> tup
     3.3): returns (u, v, s(u, v)), each (S,). A member whose Hessian is singular keeps its last point."""
     a, ky, kx = _terms(sf)
     u, v = np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
+    iky, ikx = 1j * ky, 1j * kx
     for _ in range(iterations):
-        ey, ex = np.exp(1j * np.outer(u, ky)), np.exp(1j * np.outer(v, kx))  # (S, rows), (S, cols)
-        ay = np.einsum("syx,sx->sy", a, ex)  # s^ summed over columns: (S, rows)
-        ax = np.einsum("sy,syx->sx", ey, a)
-        gu = np.einsum("sy,sy->s", 1j * ky * ey, ay).real
-        gv = np.einsum("sx,sx->s", ax, 1j * kx * ex).real
-        huu = np.einsum("sy,sy->s", -(ky**2) * ey, ay).real
-        hvv = np.einsum("sx,sx->s", ax, -(kx**2) * ex).real
-        huv = np.einsum("sy,syx,sx->s", 1j * ky * ey, a, 1j * kx * ex).real
+        ey, ex = np.exp(np.outer(u, iky)), np.exp(np.outer(v, ikx))  # (S, rows), (S, cols)
+        ay = np.matmul(a, ex[:, :, None])[:, :, 0]  # sum over columns: (S, rows)
+        ayx = np.matmul(a, (ikx * ex)[:, :, None])[:, :, 0]  # d/dv of it
+        ax = np.matmul(ey[:, None, :], a)[:, 0, :]  # sum over rows: (S, cols)
+        dey = iky * ey
+        gu = np.sum(dey * ay, axis=1).real
+        gv = np.sum(ax * ikx * ex, axis=1).real
+        huu = np.sum(iky * dey * ay, axis=1).real
+        hvv = np.sum(ax * ikx * ikx * ex, axis=1).real
+        huv = np.sum(dey * ayx, axis=1).real
         det = huu * hvv - huv**2
         ok = np.isfinite(det) & (np.abs(det) > 1e-20)
         safe = np.where(ok, det, 1.0)
         u = np.where(ok, u - (hvv * gu - huv * gv) / safe, u)
         v = np.where(ok, v - (huu * gv - huv * gu) / safe, v)
-    ey, ex = np.exp(1j * np.outer(u, ky)), np.exp(1j * np.outer(v, kx))
-    val = np.einsum("sy,syx,sx->s", ey, a, ex).real
+    ey, ex = np.exp(np.outer(u, iky)), np.exp(np.outer(v, ikx))
+    val = np.sum(ey * np.matmul(a, ex[:, :, None])[:, :, 0], axis=1).real
     return u, v, val
 
 
