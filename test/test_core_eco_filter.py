@@ -130,3 +130,16 @@ def test_detect_windows_finds_the_target_from_a_neighbouring_window(
     near, far = dets
     assert math.hypot(near.cx - box.cx, near.cy - box.cy) < 5.0
     assert near.peak > far.peak and near.psr > far.psr
+
+
+def test_a_gated_update_moves_without_learning(crossing: tuple[list[np.ndarray], Box]) -> None:
+    frames, box = crossing
+    filt = ECOFilter(ECOParams())
+    filt.init(frames[0], box)
+    before = (filt.space.count, [h.copy() for h in filt.hf])
+    det = filt.detect(frames[1])
+    filt.update(frames[1], det, learn=False, center=(det.cx + 3.0, det.cy))
+    assert filt.center == (det.cx + 3.0, det.cy)
+    assert filt.space.count == before[0] and all(np.array_equal(a, b) for a, b in zip(filt.hf, before[1]))
+    filt.update(frames[1], det, learn=True)
+    assert filt.space.count == before[0] + 1
