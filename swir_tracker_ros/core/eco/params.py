@@ -37,9 +37,9 @@ class ECOParams:
     )
     min_search_side: float = _f(
         64.0,
-        "(ours) the image sample's side is at least this many image pixels: a small target (sqrt(w h) < 16 px "
-        "here) gets a wider search area, e.g. a 10 x 8 px drone 7x instead of 4x (SRE fold 1 +0.005, fold 2 "
-        "-0.000; docs/eco.md); 0: off",
+        "(ours) the image sample's side is at least this many image pixels: a small target (sqrt(w h) < 16 "
+        "px here) gets a wider search area, e.g. a 10 x 8 px drone 7x instead of 4x (SRE fold 1 +0.005, "
+        "fold 2 -0.000; docs/eco.md); 0: off",
         0.0,
         2000.0,
     )
