@@ -142,7 +142,7 @@ class ECOFilter:
         self.since_train = 0
         self.scale_filter: ScaleFilter | None = None
         if p.scale_estimator == "dsst":
-            self.scale_filter = ScaleFilter(dsst_params(p), box.w, box.h)
+            self.scale_filter = ScaleFilter(dsst_params(p), box.w, box.h, soft=p.hog_soft)
             self.scale_filter.train(frame, box.cx, box.cy, box.w, box.h, 1.0)
 
     def _multipliers(self) -> list[float]:

@@ -55,7 +55,7 @@ class ECOParams:
         True,
         "FHOG orientation binning: soft (linear between the two nearest of 18 bins, core/fhog.py "
         "'hog_soft') or hard (nearest bin: Piotr Dollar's fhog with softBin -1, which ECO-HC's features "
-        "call, interpolates in space only)",
+        "call, interpolates in space only); the translation and the scale filter's FHOG",
     )
     hog_dim: int = _f(10, "FHOG channels after the projection P (ECO-HC 10 of 31)", 1, 31)
     intensity_cell: int = _f(
