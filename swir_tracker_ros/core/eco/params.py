@@ -52,7 +52,7 @@ class ECOParams:
     # features (ECO-HC gray: FHOG cell 6 -> 10 dims, intensity channels cell 4 -> 3 dims)
     hog_cell: int = _f(6, "FHOG cell in sample pixels (ECO-HC 6)", 2, 16)
     hog_soft: bool = _f(
-        True,
+        False,
         "FHOG orientation binning: soft (linear between the two nearest of 18 bins, core/fhog.py "
         "'hog_soft') or hard (nearest bin: Piotr Dollar's fhog with softBin -1, which ECO-HC's features "
         "call, interpolates in space only); the translation and the scale filter's FHOG",
