@@ -7,9 +7,9 @@ normalised so that its mean squared value is 1 (the reference code's `normalize_
 `normalize_size` and `normalize_dim`), multiplied by a cosine window (Hann of n + 2 points without its zero
 ends, reference code), compressed to D of its C channels by P (ECO eq. 3: P^T x) and taken to the Fourier
 domain (core/eco/fourier.py). The features themselves are the repository's: `core/fhog.py` (Piotr Dollar's
-FHOG with soft orientation bins, 31 channels, as the reference code's `fhog`) and `core/channels.py` (cell
-mean intensity plus a soft intensity histogram, standing in for the reference code's lookup table
-`intensityChannelNorm6`).
+FHOG, 31 channels; hard orientation bins by default, as the reference code's `fhog` with softBin -1) and
+`core/channels.py` (cell mean intensity plus a soft intensity histogram, standing in for the reference code's
+lookup table `intensityChannelNorm6`).
 """
 
 from __future__ import annotations
