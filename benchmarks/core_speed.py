@@ -476,6 +476,9 @@ def main() -> None:
         return
     import cv2
 
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import eco_speed  # benchmarks/eco_speed.py: the ECO base filter and the ECO-HC port (ECOHC_PORT_DIR)
+
     cv2.setNumThreads(1)
     print(f"{args.frames} frames {WIDTH}x{HEIGHT} uint16 per target size, one thread")
 
@@ -505,6 +508,10 @@ def main() -> None:
             "dsst": time_ours(frames, box, occlusion=False, estimator="dsst"),
         }
         res.update(time_opencv(to8bit(frames), box))
+        res["eco"] = eco_speed.time_eco(frames, box)  # the ECO base filter, short-term (core/eco)
+        port = eco_speed.time_port(to8bit(frames), box)  # the ECO-HC port, where ECOHC_PORT_DIR names it
+        if port:
+            res["eco_port"] = port
         results[tag] = res
         profiles[tag] = profile_ours(frames, box, occlusion=False)
         if size == HEADLINE:
@@ -518,6 +525,8 @@ def main() -> None:
         "csrt": "OpenCV CSRT",
         "kcf": "OpenCV KCF default (CN+gray)",
         "kcf_gray": "OpenCV KCF gray, 1 channel",
+        "eco": "ours ECO base filter (fDSST)",
+        "eco_port": "ECO-HC Python port",
     }
     print("\ntracker                              size      fps  cpu fps   p50 ms   p95 ms   max ms")
     for tag, res in results.items():
@@ -531,8 +540,8 @@ def main() -> None:
                     f"{r['max_ms']:8.2f}{extra}"
                 )
     head = results[f"{HEADLINE[0]}x{HEADLINE[1]}"]
-    for ours in ("normal", "dsst"):
-        for peer in ("csrt", "kcf", "kcf_gray"):
+    for ours in ("normal", "dsst", "eco"):
+        for peer in ("csrt", "kcf", "kcf_gray", "eco_port"):
             if peer in head:
                 ratio = head[ours]["fps"] / head[peer]["fps"]
                 cpu = head[ours]["cpu_fps"] / head[peer]["cpu_fps"]
