@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from swir_tracker_ros.core.bacf import BACFParams
 from swir_tracker_ros.core.conditioning import ConditioningConfig
 from swir_tracker_ros.core.dcf_ca import DCFCAParams
+from swir_tracker_ros.core.eco.params import ECOParams
 from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.paramfield import nested, param, validate_params
 from swir_tracker_ros.policies.coast import CoastParams
@@ -26,7 +27,7 @@ from swir_tracker_ros.policies.scale_search import ScaleSearchParams
 from swir_tracker_ros.policies.sweep import SweepParams
 from swir_tracker_ros.policies.update_gate import UpdateGateParams
 
-FilterParams = KCFParams | DCFCAParams | BACFParams
+FilterParams = KCFParams | DCFCAParams | BACFParams | ECOParams
 """The Params of a base filter; its type selects the filter (core/filters.py `make_filter`)."""
 
 
@@ -37,7 +38,7 @@ class TrackerParams:
 
     base: FilterParams = nested(
         KCFParams, "the base correlation filter: core/kcf.py KCFParams (paper 000 KCF), core/dcf_ca.py "
-        "(the dissertation's DCF-CA), core/bacf.py (BACF)")
+        "(the dissertation's DCF-CA), core/bacf.py (BACF), core/eco/params.py (ECO)")
     scale: ScaleSearchParams = nested(
         ScaleSearchParams, "size search at the prediction (policies/scale_search.py)")
     motion: MotionParams | None = nested(

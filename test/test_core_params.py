@@ -13,6 +13,7 @@ from conftest import REPO
 from swir_tracker_ros.configs import BASES, CONFIGURATIONS, DEFAULT_CONFIGURATION, configuration
 from swir_tracker_ros.core.base import BaseFilter
 from swir_tracker_ros.core.dcf_ca import DCFCAParams
+from swir_tracker_ros.core.eco.base import ECOBase
 from swir_tracker_ros.core.filters import FILTERS, make_filter
 from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.errors import ParameterError
@@ -43,7 +44,7 @@ def _params_objects(obj: object) -> list[object]:
 
 
 def test_the_papers_pipelines_and_the_default_are_named_configurations() -> None:
-    assert set(PAPERS) | {DEFAULT_CONFIGURATION} == set(CONFIGURATIONS)
+    assert set(PAPERS) | {DEFAULT_CONFIGURATION, "eco"} == set(CONFIGURATIONS)
     assert TrackerParams() == configuration(DEFAULT_CONFIGURATION)  # the dataclass defaults are the default
     for name in CONFIGURATIONS:
         for base in (None, *BASES):
@@ -73,7 +74,7 @@ def test_an_unknown_configuration_or_base_names_the_known_ones() -> None:
 
 def test_the_base_filter_is_chosen_by_the_type_of_its_params() -> None:
     for params_cls, filter_cls in FILTERS.items():
-        assert issubclass(filter_cls, BaseFilter)
+        assert issubclass(filter_cls, BaseFilter) or filter_cls is ECOBase  # ECO: its own geometry
         assert isinstance(make_filter(params_cls(), 40.0, 100.0), filter_cls)
     with pytest.raises(ParameterError, match="no base filter takes MotionParams"):
         make_filter(MotionParams(), 40.0, 100.0)

@@ -14,18 +14,18 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 
-from swir_tracker_ros.configs import cf, kalman, measured, robust, robust_adaptive, robust_adaptive_r
+from swir_tracker_ros.configs import cf, eco, kalman, measured, robust, robust_adaptive, robust_adaptive_r
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param
 from swir_tracker_ros.tracker_params import TrackerParams
 
-_MODULES: tuple[ModuleType, ...] = (cf, kalman, robust, robust_adaptive, robust_adaptive_r, measured)
+_MODULES: tuple[ModuleType, ...] = (cf, kalman, robust, robust_adaptive, robust_adaptive_r, measured, eco)
 CONFIGURATIONS: dict[str, Callable[[str | None], TrackerParams]] = {
     m.__name__.rsplit(".", 1)[-1]: m.params for m in _MODULES
 }
 """Every named configuration: name -> builder(base name or None)."""
 DEFAULT_CONFIGURATION = "measured"
-BASES = ("kcf", "dcf_ca", "bacf")
+BASES = ("kcf", "dcf_ca", "bacf", "eco")
 """The base filters a configuration can be built on (configs/bases.py)."""
 
 

@@ -81,6 +81,11 @@ class BaseFilter(MultiWindow, ABC):
             stretch = math.sqrt(self.tw * self.th / (ew * eh))
         return math.sqrt(w * h) * self.model_scale / self.cell * stretch
 
+    @property
+    def own_scale(self) -> bool:
+        """Does the filter estimate the size itself (DSST) instead of by the scale search's windows?"""
+        return self.scale_filter is not None
+
     @abstractmethod
     def _build(self) -> Any:
         """The filter object for feature maps of `self.shape` and a target of `self.target_cells`."""

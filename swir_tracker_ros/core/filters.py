@@ -14,6 +14,8 @@ from swir_tracker_ros.core.bacf import BACF, BACFParams
 from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.confidence import psr
 from swir_tracker_ros.core.dcf_ca import DCFCA, DCFCAParams, context_offsets
+from swir_tracker_ros.core.eco.base import ECOBase
+from swir_tracker_ros.core.eco.params import ECOParams
 from swir_tracker_ros.core.features import feature_shape
 from swir_tracker_ros.core.kcf import KCF, KCFParams
 from swir_tracker_ros.core.windows import search_window, template_size
@@ -232,13 +234,13 @@ class BACFFilter(KCFFilter):
         return ok
 
 
-FILTERS: dict[type, type[BaseFilter]] = {
-    KCFParams: KCFFilter, DCFCAParams: DCFCAFilter, BACFParams: BACFFilter,
+FILTERS: dict[type, type] = {
+    KCFParams: KCFFilter, DCFCAParams: DCFCAFilter, BACFParams: BACFFilter, ECOParams: ECOBase,
 }
 """The base tracker class of each filter Params class (`TrackerParams.base`)."""
 
 
-def make_filter(fp: Any, w: float, h: float) -> BaseFilter:
+def make_filter(fp: Any, w: float, h: float) -> BaseFilter | ECOBase:
     """The base tracker whose Params `fp` is, for a first box of size w x h (ParameterError if none)."""
     try:
         cls = FILTERS[type(fp)]

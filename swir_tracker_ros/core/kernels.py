@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """The compiled loops of the core (numba): which are in use, loaded on first use.
 
-core/fhog_jit.py (FHOG) and core/corr_jit.py (correlation, window cuts, the conditioner's stretch) are
+core/fhog_jit.py (FHOG), core/corr_jit.py (correlation, window cuts, the conditioner's stretch) and
+core/eco/kernels.py (the ECO filter's conjugate-gradient adjoint and intensity channels) are
 imported only when numba is installed and `USE_JIT` is on; every caller keeps its numpy code for the other
 case, with the same numbers.
 """
@@ -18,7 +19,7 @@ USE_JIT = True
 """Use the compiled loops when numba is importable; False forces the numpy paths (tests compare both)."""
 
 
-@lru_cache(maxsize=2)
+@lru_cache(maxsize=4)
 def _compiled_module(name: str) -> ModuleType | None:
     """core/<name>.py (numba loops: fhog_jit, corr_jit), or None when numba is not installed (imported on
     first use: numba's import costs ~0.6 s, its first compile ~2 s a loop, then loaded from its on-disk
@@ -32,6 +33,11 @@ def _compiled_module(name: str) -> ModuleType | None:
 def fhog_jit() -> ModuleType | None:
     """The compiled FHOG loops (core/fhog_jit.py) when in use (numba importable and `USE_JIT`)."""
     return _compiled_module("fhog_jit") if USE_JIT else None
+
+
+def eco_jit() -> ModuleType | None:
+    """The ECO filter's compiled loops (core/eco/kernels.py) when in use (numba importable and `USE_JIT`)."""
+    return _compiled_module("eco.kernels") if USE_JIT else None
 
 
 def corr_jit() -> ModuleType | None:

@@ -90,7 +90,7 @@ class ScaleSearch:
         size never found her again. The two wide windows let one re-detection frame recover 20 %.
         """
         factors, r = self.normal, self.p.redetect_scales
-        if r > 0.0 and len(factors) > 1 and occluded > 0 and bank.scale_filter is None:
+        if r > 0.0 and len(factors) > 1 and occluded > 0 and not bank.own_scale:
             factors = (1.0 / r, *factors, r)
         return factors
 

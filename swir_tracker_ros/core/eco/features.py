@@ -14,14 +14,13 @@ lookup table `intensityChannelNorm6`).
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from functools import lru_cache
 from types import ModuleType
 
 import numpy as np
 
-from swir_tracker_ros.core import fhog as fhog_mod
+from swir_tracker_ros.core import kernels
 from swir_tracker_ros.core.channels import intensity_channels
 from swir_tracker_ros.core.eco.fourier import centred_spectrum
 from swir_tracker_ros.core.fhog import N_CHANNELS, fhog
@@ -53,17 +52,9 @@ def cosine_window(ny: int, nx: int) -> np.ndarray:
     return np.outer(np.hanning(ny + 2)[1:-1], np.hanning(nx + 2)[1:-1]).astype(np.float32)
 
 
-@lru_cache(maxsize=1)
-def _kernels() -> ModuleType | None:
-    try:
-        return importlib.import_module("swir_tracker_ros.core.eco.kernels")
-    except ImportError:
-        return None
-
-
 def compiled() -> ModuleType | None:
-    """core/eco/kernels.py (numba loops) when numba is importable and `fhog.USE_JIT` is on, else None."""
-    return _kernels() if fhog_mod.USE_JIT else None
+    """core/eco/kernels.py (numba loops) when in use (core/kernels.py: numba importable, `USE_JIT` on)."""
+    return kernels.eco_jit()
 
 
 def block_features(patches: np.ndarray, spec: BlockSpec) -> np.ndarray:

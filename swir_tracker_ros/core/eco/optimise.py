@@ -30,7 +30,7 @@ import numpy as np
 from swir_tracker_ros.core.eco.features import compiled
 from swir_tracker_ros.core.eco.fourier import half_inner, symmetrise
 from swir_tracker_ros.core.eco.regularisation import RegOperator
-from swir_tracker_ros.core.fhog import corr_jit
+from swir_tracker_ros.core.kernels import corr_jit
 
 Vec = list[np.ndarray]
 

@@ -140,6 +140,16 @@ class ECOParams:
         4.0,
     )
 
+    # the long-term layer's tests on the response (ours; core/eco/base.py)
+    failure_peak: float = _f(
+        0.2,
+        "(ours) failure (occlusion) test of a detection: its continuous peak below this (the label's peak is "
+        "1, so the value means the same on every target); learning only above it. ROC AUC 0.974 between "
+        "frames on and off the target, on target p10 0.25, lost p90 0.25 (docs/eco.md, loss signal); 0: off",
+        0.0,
+        1.0,
+    )
+
     def validate(self) -> None:
         validate_params(self, "eco.")
 

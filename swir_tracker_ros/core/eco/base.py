@@ -1,0 +1,176 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`ECOBase`: the ECO filter (core/eco/filter.py) as the long-term tracker's base filter.
+
+The tracker's policies drive a base filter through the surface of `core/base.py`'s `BaseFilter`: the scale
+search at the prediction (`detect_scales`), detection in other windows (`detect`, the re-detection grid and
+lattice), the failure test and the update gate, training on the posterior box, the Kalman box model and the
+peak -> Huber threshold map. ECO has its own sample geometry and scale estimate (fDSST), so the windows the
+policies hand in are read for their centre and target size only: one ECO detection answers the scale
+search (as the DSST option of the correlation filters does), and the re-detection windows are ECO samples
+of the current size at the windows' centres, one feature batch.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import math
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+
+from swir_tracker_ros.core.detection import Detection
+from swir_tracker_ros.core.eco.filter import ECODetection, ECOFilter
+from swir_tracker_ros.core.eco.localise import localise
+from swir_tracker_ros.core.eco.optimise import scores
+from swir_tracker_ros.core.eco.params import ECOParams
+from swir_tracker_ros.core.windows import grid_windows
+from swir_tracker_ros.kalman import PAPER000_KCF, BoxModel, ThresholdMap, kcf_box_model
+from swir_tracker_ros.types import Box
+
+
+class ECOBase:
+    """ECO behind the base-filter surface the tracker's policies use (module docstring).
+
+    Failure (`failed`) and the update gate (`confident`) test the detection's continuous peak against
+    `failure_peak`: the label's peak is 1, so the value means the same on every target (docs/eco.md, the loss
+    signal). The Kalman box model is paper 000's (7 states) with its peak -> Huber threshold map (eq. 38) and
+    the A4 robust update.
+    """
+
+    robust_method = "A4"
+    threshold_map: ThresholdMap = PAPER000_KCF
+    psr_reacquisition = False  # re-acquisition's PSR bar was measured on KCF's PSRs, not ECO's
+    own_scale = True  # the size comes from ECO's scale estimate, not from windows of several sizes
+    learning_rate = 1.0  # ECO learns a new sample at its own weight (ECOParams.learning_rate) or not at all
+
+    def __init__(self, fp: ECOParams, w: float, h: float) -> None:
+        self.fp = fp
+        self.eco = ECOFilter(fp)
+        self.padding = fp.search_area_scale - 1.0  # the windows the policies build: ECO's search area
+        self._last: ECODetection | None = None  # the scale search's detection, learnt from by `train`
+        self._found: list[ECODetection] = []  # the last detection call's, by window (`memory_score`)
+        self.memory: list[np.ndarray] | None = None  # the long-term memory's filter (`start_memory`)
+
+    # ------------------------------------------------------------------ set-up and model
+    def initialise(self, img: np.ndarray, box: Box) -> None:
+        """Learn the projection and the filter from `box` on the first frame (ECO eq. 4-7)."""
+        self.eco.init(img, box)
+        self._last = None
+
+    def box_model(self, w: float, h: float) -> BoxModel:
+        return kcf_box_model()
+
+    def failed(self, det: Detection) -> bool:
+        """Failure (occlusion) test: the continuous peak below `failure_peak`."""
+        return det.peak < self.fp.failure_peak
+
+    def confident(self, det: Detection) -> bool:
+        """May the model learn from this (non-failed) frame: its peak reaches `failure_peak`."""
+        return det.peak >= self.fp.failure_peak
+
+    def train(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Learn the frame's scale-search sample, centred on the posterior `box` (ECO Sec. 3.2-3.3: the
+        sample space gets it at its own weight; the filter is optimised on its schedule)."""
+        if self._last is None:
+            return
+        det = dataclasses.replace(self._last, w=box.w, h=box.h)
+        self.eco.update(img, det, learn=True, center=(box.cx, box.cy))
+
+    # ------------------------------------------------------------------ detection
+    def _target(self, window: Box) -> tuple[float, float, float]:
+        """Centre and target width of a policy's window ((1 + padding) x the target)."""
+        return window.cx, window.cy, window.w / (1.0 + self.padding)
+
+    def _detection(self, d: ECODetection, scale: float) -> Detection:
+        return Detection(d.cx, d.cy, d.peak, d.psr, d.apce, scale, d.window)
+
+    def detect_scales(
+        self,
+        img: np.ndarray,
+        windows: Sequence[Box],
+        scales: Sequence[float],
+        penalty: float,
+        climb: bool,
+        floor: float = 0.0,
+    ) -> tuple[list[Detection], int, int]:
+        """The scale search at the prediction: one ECO detection (translation, then its scale estimate) at
+        the middle window's centre and size, answering for every window (the middle one wins)."""
+        mid = len(windows) // 2
+        cx, cy, w = self._target(windows[mid])
+        d = self.eco.detect(img, center=(cx, cy), scale_factor=w / self.eco.geo.base[1])
+        self._last, self._found = d, [d] * len(windows)
+        det = self._detection(d, scales[mid] * d.scale)
+        return [det] * len(windows), mid, 0
+
+    def detect(self, img: np.ndarray, windows: Sequence[Box],
+               scales: Sequence[float] | None = None) -> list[Detection]:
+        """Translation only, at each window's centre, at the size of the first window's target."""
+        if not windows:
+            return []
+        _, _, w = self._target(windows[0])
+        eco = self.eco
+        eco.set_target(eco.center[0], eco.center[1], w)
+        found = self._found = eco.detect_windows(img, [(b.cx, b.cy) for b in windows])
+        factors = scales if scales is not None else [1.0] * len(windows)
+        return [self._detection(d, s) for d, s in zip(found, factors)]
+
+    def detect_grid(self, img: np.ndarray, window: Box, overlap: float, scale: float = 1.0,
+                    skip_centre: bool = True) -> tuple[list[Detection], list[Box]]:
+        """The papers' 3x3 re-detection grid around `window` (windows overlapping by `overlap`)."""
+        wins = grid_windows(window, overlap)
+        keep = [w for k, w in enumerate(wins) if not (skip_centre and k == 4)]
+        return self.detect(img, keep, [scale] * len(keep)), wins
+
+    def detect_lattice(self, img: np.ndarray, window: Box, step: float, rings: int, scale: float = 1.0,
+                       half: tuple[int, int] | None = None, centre: bool = False,
+                       channels: int = 0) -> tuple[list[Detection], list[Box]]:
+        """The re-detection lattice (`MultiWindow.lattice_geometry`'s offsets, `step` x the window apart, in
+        image pixels) with windows centred in the image; `channels` is not used (no channel screen)."""
+        ih, iw = img.shape[:2]  # an ndarray or a SmoothedFrame (ECO samples both)
+        wins = []
+        for j in range(-rings, rings + 1):
+            for i in range(-rings, rings + 1):
+                if (i == 0 and j == 0 and not centre) or (
+                        half is not None and max(abs(i), abs(j)) >= half[0] and (i + j) % 2 != half[1]):
+                    continue
+                win = window.shifted(i * step * window.w, j * step * window.h)
+                if 0.0 <= win.cx < iw and 0.0 <= win.cy < ih:
+                    wins.append(win)
+        return self.detect(img, wins, [scale] * len(wins)), wins
+
+    # ------------------------------------------------------------------ long-term memory (LCT style)
+    def start_memory(self) -> None:
+        """The long-term memory: a copy of the first-frame filter (Ma et al., CVPR 2015, Sec. 3.2-3.3),
+        in ECO's projected Fourier domain (the projection P is fixed after the first frame)."""
+        self.memory = [hb.copy() for hb in self.eco.hf]
+
+    def memory_score(self, index: int) -> float:
+        """The memory's peak on the sample of window `index` of the last detection call."""
+        sample = self._found[index].sample
+        sf = scores(self.memory, [zb[None] for zb in sample], self.eco.out)
+        return localise(sf, self.fp.newton_iterations, 3)[1].value
+
+    def train_memory(self, img: np.ndarray, box: Box, rate: float) -> None:
+        """Blend the memory with the filter at the (small) rate `rate`: it follows a lasting change of the
+        target's look slowly and only on the frames it verified."""
+        self.memory = [(1.0 - rate) * m + rate * hb for m, hb in zip(self.memory, self.eco.hf)]
+
+    @contextlib.contextmanager
+    def memory_as_filter(self) -> Iterator[None]:
+        """Detections inside the block correlate the long-term memory instead of the filter."""
+        eco = self.eco
+        eco.hf, self.memory = self.memory, eco.hf
+        try:
+            yield
+        finally:
+            eco.hf, self.memory = self.memory, eco.hf
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """The target size ECO holds (w, h), image pixels."""
+        return self.eco.size
+
+    def __repr__(self) -> str:
+        w, h = self.eco.size if hasattr(self.eco, "geo") else (math.nan, math.nan)
+        return f"ECOBase({w:.1f}x{h:.1f})"

@@ -1,0 +1,98 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`ECOBase`: the ECO filter behind the base-filter surface the long-term policies drive, on real frames."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from swir_tracker_ros.configs import configuration
+from swir_tracker_ros.core.eco.base import ECOBase
+from swir_tracker_ros.core.eco.params import ECOParams
+from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.windows import search_window
+from swir_tracker_ros.policies.occlusion import OcclusionParams, OcclusionVerdict
+from swir_tracker_ros.policies.redetection import Redetection, RedetectionParams
+from swir_tracker_ros.policies.scale_search import ScaleSearch, ScaleSearchParams
+from swir_tracker_ros.tracker import Tracker
+from swir_tracker_ros.types import Box, TrackState
+
+SEQ = "otb_jogging-1"
+
+
+@pytest.fixture(scope="module")
+def scene(sequences_dir: Path) -> tuple[list[np.ndarray], list[Box]]:
+    """Frames 1-90 of OTB jogging-1 as [0, 1] float (the pole hides the jogger around frame 70) and gt."""
+    seq = sequences_dir / SEQ
+    frames = [cv2.imread(str(seq / f"{k:06d}.png"), cv2.IMREAD_GRAYSCALE).astype(np.float32) / 255.0
+              for k in range(1, 91)]
+    gts = [Box(*map(float, line.split(","))) for line in (seq / "gt.txt").read_text().split()[:90]]
+    return frames, gts
+
+
+def window(bank: ECOBase, box: Box, dx: float = 0.0) -> Box:
+    return search_window(box.cx + dx, box.cy, box.w, box.h, bank.padding)
+
+
+def test_the_scale_search_is_one_eco_detection_for_every_window(scene) -> None:
+    frames, gts = scene
+    bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
+    assert isinstance(bank, ECOBase) and bank.own_scale
+    bank.initialise(frames[0], gts[0])
+    verdict = OcclusionVerdict(OcclusionParams(), bank.failed, bank.psr_reacquisition)
+    res = ScaleSearch(ScaleSearchParams()).search(bank, frames[2], gts[0], verdict)
+    assert len(res.factors) == 5 and all(d is res.dets[0] for d in res.dets) and res.best == res.mid
+    det = res.dets[0]
+    assert abs(det.cx - gts[2].cx) < 3.0 and abs(det.cy - gts[2].cy) < 3.0
+    assert not bank.failed(det) and bank.confident(det) and 0.85 < det.scale < 1.15
+    assert ScaleSearch(ScaleSearchParams()).factors(bank, 5) == res.factors  # no wide sizes: ECO's own scale
+
+
+def test_failure_by_the_peak_and_redetection_in_the_grid(scene) -> None:
+    """A search window far from the jogger gives a peak under `failure_peak`; the 3x3 grid around a
+    prediction a window's step beside him finds him again."""
+    frames, gts = scene
+    bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
+    bank.initialise(frames[0], gts[0])
+    far = bank.detect(frames[2], [window(bank, gts[2], dx=-120.0)])[0]
+    assert bank.failed(far) and not bank.confident(far)
+    pred = gts[2].shifted(gts[2].w * (1.0 + bank.padding) * 2.0 / 3.0, 0.0)
+    verdict = OcclusionVerdict(OcclusionParams(), bank.failed, bank.psr_reacquisition)
+    scales = ScaleSearch(ScaleSearchParams(n=1)).search(bank, frames[2], pred, verdict)
+    found = Redetection(RedetectionParams(lattice_step=0.0)).search(bank, frames[2], pred, scales, 1)
+    assert len(found.windows) == 9 and abs(found.det.cx - gts[2].cx) < 4.0 and not bank.failed(found.det)
+
+
+def test_the_memory_knows_the_target_and_not_the_background(scene) -> None:
+    frames, gts = scene
+    bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
+    bank.initialise(frames[0], gts[0])
+    bank.start_memory()
+    bank.detect(frames[2], [window(bank, gts[2]), window(bank, gts[2], dx=-120.0)])
+    on, off = bank.memory_score(0), bank.memory_score(1)
+    assert on > 0.3 and off < 0.5 * on
+    memory, filt = bank.memory, bank.eco.hf
+    with bank.memory_as_filter():
+        assert bank.eco.hf is memory and bank.memory is filt
+    assert bank.eco.hf is filt and bank.memory is memory
+    for k in range(3, 12):  # the filter learns a few frames (optimised on its schedule), the memory not
+        bank.detect_scales(frames[k], [window(bank, gts[k])], [1.0], 1.0, climb=False)
+        bank.train(frames[k], gts[k], 1.0)
+    before = [m.copy() for m in bank.memory]
+    bank.train_memory(frames[11], gts[11], 0.5)
+    assert not all(np.array_equal(a, b) for a, b in zip(before, bank.memory))
+
+
+def test_eco_configuration_tracks_through_the_pole_and_learns_only_confident_frames(scene) -> None:
+    """`eco` on jogging-1: the pole occludes the jogger (frames ~61-83): failed frames search the grid and
+    do not learn; the jogger is tracked again after it."""
+    frames, gts = scene
+    trk = Tracker(configuration("eco"))
+    trk.init((frames[0] * 255).astype(np.uint8), gts[0])
+    res = [trk.update((f * 255).astype(np.uint8)) for f in frames[1:]]
+    occluded = [r for r in res if r.state is TrackState.OCCLUDED]
+    assert occluded and all(not r.model_updated and len(r.search_windows) == 9 for r in occluded)
+    assert all(r.box.iou(g) > 0.5 for r, g in zip(res[-5:], gts[-5:]))
