@@ -32,10 +32,9 @@ from swir_tracker_ros.types import Box
 class ECOBase:
     """ECO behind the base-filter surface the tracker's policies use (module docstring).
 
-    Failure (`failed`) and the update gate (`confident`) test the detection's continuous peak against
-    `failure_peak`: the label's peak is 1, so the value means the same on every target (docs/eco.md, the loss
-    signal). The Kalman box model is paper 000's (7 states) with its peak -> Huber threshold map (eq. 38) and
-    the A4 robust update.
+    Failure (`failed`) and the update gate (`confident`) test the detection's PSR against `failure_psr`
+    (paper 000's PSR < 7; docs/eco.md, the loss signal). The Kalman box model is paper 000's (7 states) with
+    its peak -> Huber threshold map (eq. 38) and the A4 robust update.
     """
 
     robust_method = "A4"
@@ -51,6 +50,7 @@ class ECOBase:
         self._last: ECODetection | None = None  # the scale search's detection, learnt from by `train`
         self._found: list[ECODetection] = []  # the last detection call's, by window (`memory_score`)
         self.memory: list[np.ndarray] | None = None  # the long-term memory's filter (`start_memory`)
+        self._taught = (0.0, 0.0, 0)  # LMCF gate: sums of the peak and APCE of the frames that taught, count
 
     # ------------------------------------------------------------------ set-up and model
     def initialise(self, img: np.ndarray, box: Box) -> None:
@@ -62,12 +62,24 @@ class ECOBase:
         return kcf_box_model()
 
     def failed(self, det: Detection) -> bool:
-        """Failure (occlusion) test: the continuous peak below `failure_peak`."""
-        return det.peak < self.fp.failure_peak
+        """Failure (occlusion) test: the PSR below `failure_psr`."""
+        return det.psr < self.fp.failure_psr
 
     def confident(self, det: Detection) -> bool:
-        """May the model learn from this (non-failed) frame: its peak reaches `failure_peak`."""
-        return det.peak >= self.fp.failure_peak
+        """May the model learn from this (non-failed) frame? Its PSR reaches `failure_psr`, and with the
+        `lmcf` gate its peak and APCE reach beta1 and beta2 x their means over the frames that taught it
+        (LMCF, Wang et al., CVPR 2017, eq. 12). Called once per such frame."""
+        fp = self.fp
+        if det.psr < fp.failure_psr:
+            return False
+        if fp.update_gate != "lmcf":
+            return True
+        peaks, apces, n = self._taught
+        ok = n == 0 or (det.peak >= fp.lmcf_peak_ratio * peaks / n
+                        and det.apce >= fp.lmcf_apce_ratio * apces / n)
+        if ok:
+            self._taught = (peaks + det.peak, apces + det.apce, n + 1)
+        return ok
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         """Learn the frame's scale-search sample, centred on the posterior `box` (ECO Sec. 3.2-3.3: the

@@ -140,15 +140,25 @@ class ECOParams:
         4.0,
     )
 
-    # the long-term layer's tests on the response (ours; core/eco/base.py)
-    failure_peak: float = _f(
-        0.2,
-        "(ours) failure (occlusion) test of a detection: its continuous peak below this (the label's peak is "
-        "1, so the value means the same on every target); learning only above it. ROC AUC 0.974 between "
-        "frames on and off the target, on target p10 0.25, lost p90 0.25 (docs/eco.md, loss signal); 0: off",
+    # the long-term layer's test on the response (core/eco/base.py)
+    failure_psr: float = _f(
+        7.0,
+        "failure (occlusion) test of a detection: PSR (psr_exclusion) below this, paper 000's threshold; "
+        "the model learns only from frames that pass it. The continuous peak is no target-independent "
+        "test: a 10 px drone is tracked at peaks of 0.06-0.15 (ECO, OPE), a pedestrian at 0.4-0.5; the PSR "
+        "on target stays above 15 on 95 % of the frames of both folds (docs/eco.md); 0: off",
         0.0,
-        1.0,
+        100.0,
     )
+
+    update_gate: str = _f(
+        "every",
+        "which non-failed frames teach the filter: every (ECO-HC) or lmcf (Wang et al., CVPR 2017, eq. 12: "
+        "the peak and the APCE both above a ratio of their means over the frames that taught it)",
+        choices=("every", "lmcf"),
+    )
+    lmcf_peak_ratio: float = _f(0.7, "gate lmcf: beta1, peak >= beta1 x mean peak (LMCF)", 0.0, 2.0)
+    lmcf_apce_ratio: float = _f(0.45, "gate lmcf: beta2, APCE >= beta2 x mean APCE (LMCF)", 0.0, 2.0)
 
     def validate(self) -> None:
         validate_params(self, "eco.")
