@@ -14,7 +14,7 @@ import pytest
 
 from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.windows import scale_windows
-from swir_tracker_ros.harness.evaluate import run_source, run_starts
+from swir_tracker_ros.harness.evaluate import run_source
 from swir_tracker_ros.harness.metrics import occlusion_episodes
 from swir_tracker_ros.harness.protocol import RunStats
 from swir_tracker_ros.harness.sources import open_source
@@ -199,12 +199,13 @@ def _horse(sequences_dir: Path) -> tuple[np.ndarray, Box]:
 def test_a_crossing_occluder_does_not_grow_the_hidden_targets_box(sequences_dir: Path) -> None:
     """A frame the checks reject (not failed, but its peak too weak to be the target: `occluded`) measures a
     size that may belong to something in front of the target (synthetic t9: a pedestrian crossing in front,
-    the box grew 1.16 x and followed him). With the rejected-frame policy (`policies/rejected.py`, on by default) such a frame's size
-    stays within the sizes of the recently tracked frames (and the prediction's); without the rejected-frame
-    policy (`rejected` None, 'measured' below) it takes its winning scale as a tracked frame does. Set up on a real frame: the horse is tracked still for 30 frames,
-    then the view grows 2 % a frame while blurred (sigma 6): its peaks fall below half the tracked ones and
-    every such frame is rejected while its scale search measures the larger extent. Measured: 'measured'
-    grows to 1.11 x the tracked size in 12 frames, 'recent' stays at 1.00."""
+    the box grew 1.16 x and followed him). With the rejected-frame policy (`policies/rejected.py`, on by
+    default) such a frame's size stays within the sizes of the recently tracked frames (and the
+    prediction's); without it (`rejected` None, 'measured' below) the frame takes its winning scale as a
+    tracked frame does. Set up on a real frame: the horse is tracked still for 30 frames, then the view
+    grows 2 % a frame while blurred (sigma 6): its peaks fall below half the tracked ones and every such
+    frame is rejected while its scale search measures the larger extent. Measured: 'measured' grows to
+    1.11 x the tracked size in 12 frames, 'recent' (the policy) stays at 1.00."""
     image, box = _horse(sequences_dir)
     centre = (box.cx, box.cy)
 
@@ -233,12 +234,12 @@ def test_a_weak_frame_does_not_extrapolate_a_shrinking_size(sequences_dir: Path)
     """VOT-TIR horse from the SRE start shifted up by 10 %: while the horse turned side-on its peaks fell to
     half the tracked mean, the box shrank a little each frame and the Kalman size velocity carried the
     shrink on until the box lost the horse (measured on the session-9 machine). With
-    `coast.size_hold_peak_ratio` 0.6 (the default) a frame whose peak is below 0.6 x the tracked mean zeroes the size velocity before its
-    update: the size is still measured but not extrapolated. Set up on a real frame: the view of the horse
-    shrinks 1 % a frame for 40 frames (the box follows, tracked, and learns the shrink as a size velocity),
-    then stays at that size for 8 frames blurred (sigma 3.5: peaks about 0.55 x the tracked ones, still
-    `tracking`). Measured: with the option the box keeps its size (ratio 1.000), without it the box shrinks
-    on by about 1.5 % a frame (0.91 after 8 frames)."""
+    `coast.size_hold_peak_ratio` 0.6 (the default) a frame whose peak is below 0.6 x the tracked mean zeroes
+    the size velocity before its update: the size is still measured but not extrapolated. Set up on a real
+    frame: the view of the horse shrinks 1 % a frame for 40 frames (the box follows, tracked, and learns
+    the shrink as a size velocity), then stays at that size for 8 frames blurred (sigma 3.5: peaks about
+    0.55 x the tracked ones, still `tracking`). Measured: with the option the box keeps its size (ratio
+    1.000), without it the box shrinks on by about 1.5 % a frame (0.91 after 8 frames)."""
     image, box = _horse(sequences_dir)
     centre = (box.cx, box.cy)
 
