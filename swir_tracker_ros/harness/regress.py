@@ -95,14 +95,16 @@ def measure_in_envs(cfg: GateConfig, envs: Sequence[str], results_root: Path, se
                     jobs: int = 1,
                     progress: Callable[[str], None] | None = None) -> dict[str, dict[Key, float]]:
     """Run the set in a subprocess per numeric environment (each with its own results directory under
-    `results_root`, so its runs are stored apart) and collect the averages each one measured."""
+    `results_root`, so its runs are stored apart) and collect the averages each one measured. Calibrating
+    measures the current code: stored runs that other code made are played again (`--rerun`), the others
+    are taken."""
     out = {}
     with tempfile.TemporaryDirectory(prefix="harness-calibrate-") as tmp:
         for env in envs:
             js = Path(tmp) / f"{env}.json"
             argv = ["-m", "swir_tracker_ros.harness", "regress", "--config", str(cfg.path),
                     "--measure", str(js), "--results", str(results_root / env),
-                    "--sequences", str(sequences_dir), "--jobs", str(jobs), "--quiet"]
+                    "--sequences", str(sequences_dir), "--jobs", str(jobs), "--rerun", "--quiet"]
             if progress:
                 progress(f"measuring {cfg.name} in {env}: {describe(env)}")
             proc = run_in(env, argv)
