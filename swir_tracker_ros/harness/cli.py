@@ -120,7 +120,7 @@ def _stored_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--results", default=None,
                    help="results directory of the stored runs (default: $SWIR_RESULTS or "
                         f"{commands.DEFAULT_RESULTS})")
-    p.add_argument("--data", default=str(DEFAULT_SEQUENCES),
+    p.add_argument("--data", dest="data_dir", default=str(DEFAULT_SEQUENCES),
                    help="the sequence folders: their sorted names give the two folds (default: %(default)s)")
     p.add_argument("--peer-dir", default=str(DEFAULT_PEERS),
                    help="stored runs of trackers outside the project, e.g. ecohc_py (default: %(default)s)")

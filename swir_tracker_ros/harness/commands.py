@@ -89,7 +89,8 @@ def _play_and_load(a: argparse.Namespace, ours: list[Player], peers: list[str], 
     everyone = ours + [Player.opencv(t) for t in peers]
     play(srcs, everyone, starts, style, store, a.jobs, a.rerun, progress(a))
     labels = [p.label for p in everyone] + list(getattr(a, "peers", None) or [])
-    return load_results(store, labels, [s.key for s in srcs], starts, style, Path(a.data), Path(a.peer_dir))
+    return load_results(store, labels, [s.key for s in srcs], starts, style, Path(a.data_dir),
+                        Path(a.peer_dir))
 
 
 def _write_json(path: str | None, results: Results, curves: bool = False) -> None:
@@ -143,7 +144,7 @@ def _print_tables(results: Results, a: argparse.Namespace) -> None:
 
 def _stored(a: argparse.Namespace, labels: list[str], starts: tuple[str, ...]) -> Results:
     keys = [s.key for s in sources(a)] if a.bags else None
-    return load_results(results_dir(a), labels, keys, starts, a.sre_style, Path(a.data), Path(a.peer_dir),
+    return load_results(results_dir(a), labels, keys, starts, a.sre_style, Path(a.data_dir), Path(a.peer_dir),
                         a.allow_mixed)
 
 
