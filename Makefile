@@ -18,7 +18,7 @@ PIP_FLAGS ?= --disable-pip-version-check -q
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PYTHONDONTWRITEBYTECODE = 1
 
-.PHONY: venv test lint demo demo-sweep bench bench-venv mot-venv train-venv regress train clean
+.PHONY: venv test test-numerics lint demo demo-sweep bench bench-venv mot-venv train-venv regress train clean
 
 venv: $(STAMP) $(ISTAMP)
 
@@ -73,6 +73,12 @@ test: $(STAMP) $(ISTAMP) $(BSTAMP) $(TSTAMP)
 
 regress: $(STAMP) $(ISTAMP)
 	$(VENV)/bin/harness regress
+
+# Issue 32: the chaos-prone tests and the CI gate under each numeric environment (OpenBLAS core types, OpenCV
+# without AVX2/AVX-512, Numba's generic CPU), one table. NUMERICS_ARGS, e.g. "--suite" or "--detail".
+NUMERICS_ARGS ?=
+test-numerics: $(STAMP) $(ISTAMP)
+	$(VPY) benchmarks/numerics.py $(NUMERICS_ARGS)
 
 demo: $(STAMP) $(ISTAMP)
 	$(VENV)/bin/demo --out out/demo

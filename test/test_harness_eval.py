@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""`harness make-bag` / `eval` / `compare` end to end with the real tracker core, JSON and plots."""
+"""`harness make-bag` / `eval` / `compare` / `table` end to end with the real tracker core, JSON and plots."""
 
 from __future__ import annotations
 
@@ -8,10 +8,15 @@ import json
 import numpy as np
 import pytest
 
+from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness import cli
+from swir_tracker_ros.harness.analysis import load_results
 from swir_tracker_ros.harness.bagio import read_frames
-from swir_tracker_ros.harness.evaluate import evaluate
+from swir_tracker_ros.harness.compare import BENCH
+from swir_tracker_ros.harness.evaluate import OPE, default_configuration
+from swir_tracker_ros.harness.runner import Player, play
 from swir_tracker_ros.harness.sources import open_source
+from swir_tracker_ros.harness.store import RunStore
 
 
 @pytest.fixture(scope="module")
@@ -47,52 +52,66 @@ def test_make_bag_16_bit_and_synth(tmp_path, sequences_dir):
 
 
 def test_eval_cli_json_and_plots(crossing_bag, tmp_path, capsys):
-    js, plots = tmp_path / "r.json", tmp_path / "plots"
+    js, plots, results = tmp_path / "r.json", tmp_path / "plots", tmp_path / "results"
     rc = cli.main(["eval", str(crossing_bag), "--tracker", "cf", "robust_adaptive", "--json", str(js),
-                   "--plots", str(plots), "--quiet"])
+                   "--plots", str(plots), "--results", str(results), "--quiet"])
     assert rc == 0
     out = capsys.readouterr().out
     assert "otb_crossing" in out and "MEAN" in out
     data = json.loads(js.read_text())
-    row = data["sequences"]["otb_crossing"]["robust_adaptive"]
-    assert {"precision_20", "success_auc", "center_error", "lost_frames", "fps"} <= set(row)
-    assert set(data["mean"]) == {"cf", "robust_adaptive"}
-    assert row["precision_20"] > 0.9 and row["fps"] > 0  # an easy, unoccluded pedestrian
+    row = data["sequences"]["otb_crossing"]["robust_adaptive"][OPE]
+    assert {"precision_20", "success_auc", "center_error", "zero_iou", "false_tracking", "fps"} <= set(row)
+    assert data["labels"] == ["cf", "robust_adaptive"] and row["frames"] == 39  # frames 2..40
+    assert (results / "runs" / "robust_adaptive" / "otb_crossing" / "ope.json").is_file()
     pngs = sorted(p.name for p in plots.glob("*.png"))
     assert pngs == ["precision_mean.png", "precision_otb_crossing.png", "success_mean.png",
                     "success_otb_crossing.png"]
     assert (plots / "precision_mean.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the stored runs are scored again without being played: `table` reads storage only
+    assert cli.main(["table", "cf", "robust_adaptive", "--results", str(results), "--protocol", "ope",
+                     "--json", str(tmp_path / "t.json")]) == 0
+    again = json.loads((tmp_path / "t.json").read_text())
+    assert again["sequences"]["otb_crossing"] == data["sequences"]["otb_crossing"]
+    assert "OPE fold 1: AUC / P@20 / FT" in capsys.readouterr().out  # the fold of its name
 
 
-def test_bag_and_folder_give_identical_scores(crossing_bag, sequences_dir):
-    a = evaluate([open_source(crossing_bag, max_frames=25)], ["cf"]).sequences["otb_crossing"]["cf"]
-    b = evaluate([open_source(sequences_dir / "otb_crossing", max_frames=25)], ["cf"]) \
-        .sequences["otb_crossing"]["cf"]
-    assert a.precision_curve == b.precision_curve and a.success_curve == b.success_curve
+def test_bag_and_folder_give_identical_scores(crossing_bag, sequences_dir, tmp_path):
+    bag = open_source(crossing_bag, max_frames=25)
+    folder = open_source(sequences_dir / "otb_crossing", max_frames=25)
+    scores = []
+    for src, store in ((bag, RunStore(tmp_path / "a")), (folder, RunStore(tmp_path / "b"))):
+        play([src], [Player.ours("cf")], (OPE,), "otb", store)
+        scores.append(load_results(store, ["cf"], starts=(OPE,)).ope("otb_crossing@25", "cf"))
+    assert scores[0].precision_curve == scores[1].precision_curve
+    assert scores[0].success_curve == scores[1].success_curve
+    # one results directory holds one content per sequence name: the bag is refused beside the folder
+    with pytest.raises(HarnessError, match=r"otb_crossing@25 .* other content"):
+        play([bag], [Player.ours("cf", label="other")], (OPE,), "otb", RunStore(tmp_path / "b"))
 
 
 def test_eval_errors_are_one_line(tmp_path, capsys):
     assert cli.main(["eval", str(tmp_path / "missing"), "--tracker", "cf"]) == 2
     assert "harness: error:" in capsys.readouterr().err
+    assert cli.main(["eval", str(tmp_path), "--tracker", "cf", "--reuse", "x.json"]) == 2
+    assert "--reuse is gone" in capsys.readouterr().err
+    assert cli.main(["table", "nobody", "--results", str(tmp_path)]) == 2
+    assert "no runs labelled 'nobody'" in capsys.readouterr().err
 
 
-def test_compare_adds_opencv_rows(crossing_bag):
-    from swir_tracker_ros.harness.compare import BENCH, add_opencv
+def test_the_default_configuration_has_its_own_name():
+    assert Player.ours("default").label == default_configuration() != "default"
+    with pytest.raises(Exception, match=r"unknown configuration 'nope'; known: cf, .*default"):
+        Player.ours("nope")
 
+
+def test_compare_adds_opencv_rows(crossing_bag, tmp_path, capsys):
     if not (BENCH / ".installed").exists():
         pytest.skip("`make bench-venv` has not been run (compare builds it on first use)")
-    result = evaluate([open_source(crossing_bag, max_frames=20)], ["cf"])
-    add_opencv(result, [open_source(crossing_bag, max_frames=20)], ["MOSSE", "KCF"])
-    per = result.sequences["otb_crossing"]
+    rc = cli.main(["compare", str(crossing_bag), "--frames", "20", "--tracker", "cf", "--opencv", "MOSSE",
+                   "KCF", "--results", str(tmp_path), "--json", str(tmp_path / "c.json"), "--quiet"])
+    assert rc == 0
+    per = json.loads((tmp_path / "c.json").read_text())["sequences"]["otb_crossing@20"]
     assert set(per) == {"cf", "opencv_mosse", "opencv_kcf"}
-    assert per["opencv_kcf"].frames == 20 and per["opencv_kcf"].precision_20 > 0.5
-
-
-def test_json_round_trip_for_reuse(crossing_bag):
-    from swir_tracker_ros.harness.evaluate import EvalResult
-
-    r = evaluate([open_source(crossing_bag, max_frames=10)], ["cf"])
-    back = EvalResult.from_json(json.loads(json.dumps(r.to_json(curves=True))))
-    assert back.sequences["otb_crossing"]["cf"] == r.sequences["otb_crossing"]["cf"]
-    again = evaluate([open_source(crossing_bag, max_frames=10)], ["cf"], reuse=back)
-    assert again.sequences["otb_crossing"]["cf"] is back.sequences["otb_crossing"]["cf"]  # not re-run
+    assert per["opencv_kcf"][OPE]["frames"] == 19 and per["opencv_kcf"][OPE]["precision_20"] > 0.5
+    rec = RunStore(tmp_path).load("opencv_kcf", "otb_crossing@20", OPE, None)
+    assert rec.provenance["tracker"] == "opencv" and rec.provenance["code"].startswith("opencv-")

@@ -9,17 +9,19 @@ import numpy as np
 import pytest
 
 from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.evaluate import Run
 from swir_tracker_ros.harness.metrics import (
     PRECISION_THRESHOLDS,
     SUCCESS_THRESHOLDS,
     auc,
     center_errors,
-    mean_scores,
     overlaps,
     precision_curve,
     score,
     success_curve,
 )
+from swir_tracker_ros.harness.plots import mean_curves
+from swir_tracker_ros.harness.protocol import RunStats
 from swir_tracker_ros.types import Box
 
 GT = Box(100, 100, 20, 40)
@@ -71,9 +73,12 @@ def test_score_fields_and_lost_frames():
     assert set(s.summary()) >= {"precision_20", "success_auc", "center_error", "lost_frames", "fps"}
 
 
-def test_mean_scores_weigh_sequences_equally():
-    a = score([GT] * 10, [GT] * 10, 1.0)
-    b = score([None] * 2, [GT] * 2, 1.0)
-    m = mean_scores([a, b])
-    assert m.precision_20 == pytest.approx(0.5) and m.frames == 12 and m.lost_frames == 2
-    assert len(m.precision_curve) == 51
+def test_mean_curves_weigh_sequences_equally():
+    a = RunStats.of(Run([GT] * 11, [GT] * 11, [None] * 11, 1.0, ["init"] + ["tracking"] * 10, [None] * 11,
+                        GT), 25.0)
+    b = RunStats.of(Run([GT, None, None], [GT] * 3, [None] * 3, 1.0, ["init", "lost", "lost"], [None] * 3,
+                        GT), 25.0)
+    assert (a.frames, b.frames) == (10, 2) and b.precision_20 == 1.0  # failure keeps the start box here
+    c = RunStats.of(Run([GT, None], [GT] * 2, [None] * 2, 1.0, ["init", "unanswered"], [None] * 2, GT), 25.0)
+    m = mean_curves([a, c])
+    assert m.precision_20 == pytest.approx(0.5) and m.frames == 11 and len(m.precision_curve) == 51

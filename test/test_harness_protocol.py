@@ -1,17 +1,20 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Issue-12 protocol: SRE start boxes, false tracking, occlusions survived, peer cache, OPE+SRE end to end."""
+"""The protocol: SRE start boxes, false tracking, occlusions survived, stored OpenCV peers, OPE + SRE end to
+end."""
 
 from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass, field
 
 import pytest
 
 from swir_tracker_ros.errors import HarnessError
-from swir_tracker_ros.harness import cli
-from swir_tracker_ros.harness.compare import BENCH, PeerCache, bench_python, run_worker, source_fingerprint
-from swir_tracker_ros.harness.evaluate import Run
+from swir_tracker_ros.harness import bench_worker, cli
+from swir_tracker_ros.harness.analysis import load_results
+from swir_tracker_ros.harness.compare import BENCH, bench_python, run_worker, runs_from_worker
+from swir_tracker_ros.harness.evaluate import OPE, Run, _set_path, tracker_params
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
     carried_truth,
@@ -22,8 +25,10 @@ from swir_tracker_ros.harness.metrics import (
     sre_box,
     sre_boxes,
 )
-from swir_tracker_ros.harness.protocol import ProtocolResult, RunStats, run_protocol
+from swir_tracker_ros.harness.protocol import Results, RunStats
+from swir_tracker_ros.harness.runner import Player, play, protocol_starts
 from swir_tracker_ros.harness.sources import open_source
+from swir_tracker_ros.harness.store import RunStore
 from swir_tracker_ros.types import Box
 
 # Hand-computed from the OTB toolkit's shiftInitBB for the 0-based box (100, 50, 40, 80) in a 640x480 image:
@@ -105,41 +110,6 @@ def test_run_stats_score_frames_after_the_start():
     assert st.precision_20 == pytest.approx(1 / 3)
 
 
-def test_peer_cache_key_path_and_round_trip(tmp_path, sequences_dir):
-    src = open_source(sequences_dir / "otb_crossing", max_frames=10)
-    k = PeerCache.key("4.14.0", "CSRT", src, "left")
-    assert k["opencv"] == "4.14.0" and k["tracker"] == "CSRT" and k["sequence"] == "otb_crossing"
-    assert k["start"] == "left" and k["style"] == "otb" and k["frames"] == 10
-    longer = open_source(sequences_dir / "otb_crossing", max_frames=11)
-    girl = open_source(sequences_dir / "otb_girl", max_frames=10)
-    others = [PeerCache.key("4.12.0", "CSRT", src, "left"), PeerCache.key("4.14.0", "KCF", src, "left"),
-              PeerCache.key("4.14.0", "CSRT", src, "right"),
-              PeerCache.key("4.14.0", "CSRT", src, "left", "shift"),
-              PeerCache.key("4.14.0", "CSRT", longer, "left"), PeerCache.key("4.14.0", "CSRT", girl, "left")]
-    cache = PeerCache(tmp_path)
-    paths = {cache.path(x) for x in [k, *others]}
-    assert len(paths) == 7  # every component of the key changes the file
-    ope = PeerCache.key("4.14.0", "CSRT", src, "none")
-    assert PeerCache.key("4.14.0", "CSRT", src, "none", "shift") == ope  # OPE is the same in both styles
-    p = cache.path(k)
-    assert p.relative_to(tmp_path).parts[:3] == ("opencv-4.14.0", "CSRT", "otb_crossing")
-    assert p.name.startswith("left-")
-    assert source_fingerprint(src) == source_fingerprint(open_source(sequences_dir / "otb_crossing",
-                                                                     max_frames=10))
-    data = {"name": "otb_crossing", "tracker": "CSRT", "opencv": "4.14.0", "worker": 2,
-            "gt": [[1, 2, 3, 4], [1, 2, 3, 4]], "occluded": [None, None], "occlusion": [None, None],
-            "runs": [{"perturbation": "left", "init": [0, 2, 3, 4], "pred": [[0, 2, 3, 4], [1, 2, 3, 4]],
-                      "ok": [False, True], "seconds": 0.5}]}
-    assert cache.load(k) is None
-    cache.store(k, data, "left")
-    run = cache.load(k)
-    assert run is not None and run.states == ["init", "tracking"] and run.init == Box(0, 2, 3, 4)
-    stored = json.loads(p.read_text())
-    stored["key"]["opencv"] = "4.12.0"  # a file whose stored key differs is not used
-    p.write_text(json.dumps(stored))
-    assert cache.load(k) is None
-
-
 needs_bench = pytest.mark.skipif(not (BENCH / ".installed").exists(),
                                  reason=".venv-bench missing (`make bench-venv`)")
 
@@ -179,77 +149,75 @@ def test_run_stats_carried_and_floor_scores():
     assert runs["scale_0.8"].carried_auc == pytest.approx(20 / 21)
     # IoU 0.64 passes the thresholds 0, 0.05, ..., 0.6: 13 of 21
     assert runs["scale_0.8"].floor_auc == pytest.approx(13 / 21)
-    res = ProtocolResult(("sre",), {"s": {"t": runs}}, {"s": "real"}, ["t"])
+    res = Results()
+    for p, r in runs.items():
+        res.add("s", "t", p, r)
     sre = res.sre("s", "t")
     assert sre["carried_spread"] == pytest.approx(0.0) and sre["floor_spread"] == pytest.approx(4 / 21)
     summ = res.summary("t", ["s"])
     assert summ["sre_floor_spread"] == pytest.approx(4 / 21)
     assert summ["sre_carried_mean"] == pytest.approx(20 / 21)
-    old = ProtocolResult.from_json({"protocols": ["sre"], "trackers": ["t"], "sequences": {"s": {
-        "kind": "real", "t": {"ope": None, "sre": {p: {"success_auc": 0.5, "precision_20": 1.0,
-                                                       "false_tracking": 0, "zero_iou": 0, "frames": 5,
-                                                       "fps": 1.0} for p in SRE_PERTURBATIONS}}}}})
-    assert "sre_carried_spread" not in old.summary("t", ["s"])  # JSON written before the field existed
-
-
-def test_protocol_end_to_end_with_opencv_kcf(tmp_path, sequences_dir):
-    src = open_source(sequences_dir / "otb_crossing", max_frames=12)
-    first = next(iter(src.frames()))
-    res = run_protocol([src], ["robust_adaptive"], ["KCF"], ("ope", "sre"), cache_root=tmp_path)
-    assert res.trackers == ["robust_adaptive", "opencv_kcf"]
-    for t in res.trackers:
-        runs = res.stats["otb_crossing"][t]
-        assert set(runs) == {"none", *SRE_PERTURBATIONS}
-        assert all(r.frames == 11 for r in runs.values())  # frames 2..12 scored
-    sre = res.sre("otb_crossing", "robust_adaptive")
-    assert sre["runs"] == 12 and sre["min"] <= sre["mean"] <= sre["max"]
-    # the worker started from the same perturbed boxes as ours
-    h, w = first.image.shape[:2]
-    opencv = res.meta["opencv"]
-    for p in ("none", "top_left", "scale_1.2"):
-        run = PeerCache(tmp_path).load(PeerCache.key(opencv, "KCF", src, p))
-        assert run is not None and run.init == sre_box(first.gt, p, w, h)
-    box = Box(30.4, 80.0, 20.0, 40.6)  # an explicit start box (bench_worker --init)
-    explicit = run_worker(src, "KCF", bench_python(build=False), init=box)["init"]
-    assert explicit.init == box and explicit.init_index == 0 and len(explicit.pred) == 12
-    again = run_protocol([src], [], ["KCF"], ("ope", "sre"), cache_root=tmp_path)
-    assert again.stats["otb_crossing"]["opencv_kcf"] == res.stats["otb_crossing"]["opencv_kcf"]
-    back = ProtocolResult.from_json(json.loads(json.dumps(res.to_json())))
-    assert back.stats == res.stats and back.kinds == {"otb_crossing": "real"}
-    said: list[str] = []
-    reused = run_protocol([src], ["robust_adaptive"], [], ("ope", "sre"), progress=said.append, reuse=back)
-    assert said == ["1 (sequence, tracker) results reused"]
-    assert reused.stats["otb_crossing"]["robust_adaptive"] == res.stats["otb_crossing"]["robust_adaptive"]
+    back = Results.from_json(json.loads(json.dumps(res.to_json(curves=True))))
+    assert back.stats == res.stats and back.summary("t", ["s"]) == summ
 
 
 @needs_bench
-def test_compare_protocol_cli_json(tmp_path, sequences_dir, capsys):
+def test_protocol_end_to_end_with_opencv_kcf(tmp_path, sequences_dir):
+    src = open_source(sequences_dir / "otb_crossing", max_frames=12)
+    first = next(iter(src.frames()))
+    store = RunStore(tmp_path)
+    starts = protocol_starts(("ope", "sre"))
+    play([src], [Player.ours("robust_adaptive"), Player.opencv("KCF")], starts, "otb", store)
+    res = load_results(store, ["robust_adaptive", "opencv_kcf"], starts=starts)
+    assert res.labels == ["robust_adaptive", "opencv_kcf"]
+    for t in res.labels:
+        runs = res.runs("otb_crossing@12", t)
+        assert set(runs) == {OPE, *SRE_PERTURBATIONS}
+        assert all(r.frames == 11 for r in runs.values())  # frames 2..12 scored
+    sre = res.sre("otb_crossing@12", "robust_adaptive")
+    assert sre["runs"] == 12 and sre["min"] <= sre["mean"] <= sre["max"]
+    # the worker started from the same perturbed boxes as ours, and its runs are stored like ours
+    h, w = first.image.shape[:2]
+    for p in (OPE, "top_left", "scale_1.2"):
+        ours = store.load("robust_adaptive", "otb_crossing@12", p, None if p == OPE else "otb")
+        peer = store.load("opencv_kcf", "otb_crossing@12", p, None if p == OPE else "otb")
+        assert peer.init == ours.init == sre_box(first.gt, p, w, h)
+        assert peer.provenance["tracker"] == "opencv" and peer.provenance["configuration"] == "KCF"
+    box = Box(30.4, 80.0, 20.0, 40.6)  # an explicit start box (bench_worker --init)
+    explicit = run_worker(src, "KCF", bench_python(build=False), init=box)["init"]
+    assert explicit.init == box and explicit.init_index == 0 and len(explicit.pred) == 12
+    said: list[str] = []
+    again = play([src], [Player.opencv("KCF")], starts, "otb", store, progress=said.append)
+    assert again.computed == 0 and said == [f"13 run(s) taken from {store.root}"]
+
+
+@needs_bench
+def test_compare_protocol_cli_with_peers(tmp_path, sequences_dir, capsys):
     js = tmp_path / "p.json"
     rc = cli.main(["compare", str(sequences_dir / "otb_crossing"), "--frames", "8", "--protocol", "ope",
-                   "--tracker", "cf", "--opencv", "KCF", "--peer-cache", str(tmp_path / "cache"),
-                   "--json", str(js), "--markdown", str(tmp_path / "p.md"), "--quiet"])
+                   "--tracker", "cf", "--opencv", "KCF", "--peers", "ecohc_py",
+                   "--results", str(tmp_path / "r"), "--json", str(js), "--markdown", str(tmp_path / "p.md"),
+                   "--quiet"])
     assert rc == 0
     md = (tmp_path / "p.md").read_text()
-    assert "| sequence | cf | opencv_kcf |" in md and "| otb_crossing | " in md
+    assert "| sequence | cf | opencv_kcf | ecohc_py |" in md and "| otb_crossing@8 | " in md
     out = capsys.readouterr().out
-    assert "OPE real sequences" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
+    assert "OPE fold 1" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
     data = json.loads(js.read_text())
-    assert set(data["summary"]["real"]) == {"cf", "opencv_kcf"} and data["meta"]["complete"] is True
-    assert data["sequences"]["otb_crossing"]["cf"]["ope"]["frames"] == 7
-    assert any((tmp_path / "cache").rglob("none-*.json"))
+    assert set(data["summary"]["fold 1"]) == {"cf", "opencv_kcf", "ecohc_py"}
+    assert data["sequences"]["otb_crossing@8"]["ecohc_py"][OPE]["frames"] == 7
+    assert cli.main(["compare", str(sequences_dir / "otb_crossing"), "--protocol", "ope", "--peer-cache",
+                     str(tmp_path)]) == 2
+    assert "--peer-cache is gone" in capsys.readouterr().err
 
 
 def test_set_overrides_tracker_parameters():
-    from dataclasses import dataclass, field
-
-    from swir_tracker_ros.errors import HarnessError
-    from swir_tracker_ros.harness.evaluate import _set_path, tracker_params
-
-    p = tracker_params("robust_adaptive", None, ["base.padding=2.0", "occlusion.max_frames=9"])
+    p = tracker_params("robust_adaptive", ["base.padding=2.0", "occlusion.max_frames=9"])
     assert p.base.padding == 2.0 and p.occlusion.max_frames == 9
-    for bad in (["base.padding=-1"], ["no_such=1"], ["base.padding"], ["base.padding=[1"]):
+    assert type(tracker_params("measured", ["pipeline=dcf_ca"]).base).__name__ == "DCFCAParams"
+    for bad in (["base.padding=-1"], ["no_such=1"], ["base.padding"], ["base.padding=[1"], ["pipeline=nope"]):
         with pytest.raises(HarnessError):
-            tracker_params("robust_adaptive", None, bad)
+            tracker_params("robust_adaptive", bad)
 
     @dataclass
     class Inner:
@@ -265,10 +233,8 @@ def test_set_overrides_tracker_parameters():
 
 
 def test_opencv_failure_frames_keep_the_last_box(monkeypatch) -> None:
-    """bench_worker v3: a frame whose `update` returns ok False is scored with the last box the tracker gave
-    (as an application shows it, and as our tracker's box is scored in every state), not as no box."""
-    from swir_tracker_ros.harness import bench_worker
-
+    """bench_worker v3: a frame whose `update` returns ok False is stored as state `lost` with the last box
+    the tracker gave (the scoring rule keeps the last box on a failure frame for every tracker)."""
     class Flaky:
         def __init__(self) -> None:
             self.k = 0
@@ -287,3 +253,6 @@ def test_opencv_failure_frames_keep_the_last_box(monkeypatch) -> None:
     assert run["ok"][3] is False and run["ok"][4] is True
     assert run["pred"][3] == run["pred"][2]  # held, not None
     assert all(p is not None for p in run["pred"])
+    out["gt"] = [[0.0, 0.0, 1.0, 1.0]] * 8
+    stored = runs_from_worker(out)["none"]
+    assert stored.states[3] == "lost" and stored.states[4] == "tracking"

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The `harness` command: make-bag, synth, info, eval, compare, replay, regress (docs/harness.md)."""
+"""The `harness` command: make-bag, synth, info, eval, compare, table, verdict, regress, replay
+(docs/harness.md)."""
 
 from __future__ import annotations
 
@@ -9,14 +10,23 @@ import signal
 import sys
 from pathlib import Path
 
-from swir_tracker_ros.configs import CONFIGURATIONS, DEFAULT_CONFIGURATION
 from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness import commands
+from swir_tracker_ros.harness.analysis import DEFAULT_PEERS, DEFAULT_SEQUENCES
 from swir_tracker_ros.harness.bagio import FrameRecord, bag_info, write_bag
-from swir_tracker_ros.harness.evaluate import EvalResult, evaluate, format_table
+from swir_tracker_ros.harness.compare import OPENCV_TRACKERS
+from swir_tracker_ros.harness.evaluate import DEFAULT, OPE, configurations
+from swir_tracker_ros.harness.gate import GATED
 from swir_tracker_ros.harness.metrics import SRE_STYLES
+from swir_tracker_ros.harness.numerics import ENVIRONMENTS
+from swir_tracker_ros.harness.protocol import Results
+from swir_tracker_ros.harness.regress import REGRESSION_DIR
+from swir_tracker_ros.harness.runner import PROTOCOLS
 from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, convert_bits, open_source
-
-DEFAULT_PEER_CACHE = str(Path.home() / ".cache" / "swir_tracker_ros" / "peers")
+from swir_tracker_ros.harness.tables import format_eval
+from swir_tracker_ros.scene import scenarios
+from swir_tracker_ros.scene.camera import CameraView
+from swir_tracker_ros.scene.scenarios import make_scenario
 
 
 def _err(msg: str) -> None:
@@ -31,12 +41,8 @@ def _bag_from_source(src: Source, out: Path, storage: str, compress: str | None,
     src_bits = src.bits or (8 if first.image.dtype.itemsize == 1 else 16)
     out_bits = bits or src_bits
     if src.kind == "synth":
-        from swir_tracker_ros.scene.scenarios import make_scenario
-
         cam = make_scenario(src.location).views[0].camera_info()
     else:
-        from swir_tracker_ros.scene.camera import CameraView
-
         h, w = first.image.shape[:2]
         cam = CameraView(hfov_deg=hfov_deg, width=w, height=h).camera_info()
     meta = {"name": src.name, "fps": src.fps, "bits": out_bits, "source": src.location, "kind": src.kind}
@@ -60,8 +66,6 @@ def cmd_make_bag(a: argparse.Namespace) -> int:
 
 
 def cmd_synth(a: argparse.Namespace) -> int:
-    from swir_tracker_ros.scene import scenarios
-
     if a.list or not a.name:
         for name, spec in scenarios().items():
             row = f"Table 1 row {spec.table1_row}" if spec.table1_row else "extra"
@@ -99,146 +103,132 @@ def cmd_info(a: argparse.Namespace) -> int:
     return 0
 
 
-def _sources(a: argparse.Namespace) -> list[Source]:
-    srcs = []
-    for spec in a.bags:
-        if spec == SYNTH_PREFIX + "all":  # every synthetic scenario (`harness synth --list`)
-            from swir_tracker_ros.scene import scenarios
-
-            srcs += [open_source(SYNTH_PREFIX + n, a.frames) for n in scenarios()]
-            continue
-        p = Path(spec)
-        if p.is_dir() and not (p / "gt.txt").exists() and not (p / "metadata.yaml").exists() \
-                and any((c / "gt.txt").exists() for c in p.iterdir() if c.is_dir()):
-            srcs += [open_source(c, a.frames, a.image_topic, a.gt_topic) for c in sorted(p.iterdir())
-                     if (c / "gt.txt").exists()]  # a folder of sequence folders
-        else:
-            srcs.append(open_source(spec, a.frames, a.image_topic, a.gt_topic))
-    return srcs
-
-
-def _finish(result: EvalResult, a: argparse.Namespace) -> None:
-    print(format_table(result))
-    if a.json:
-        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(a.json).write_text(json.dumps(result.to_json(curves=a.curves), indent=1))
-        print(f"wrote {a.json}")
-    if a.plots:
-        from swir_tracker_ros.harness.plots import plot_result
-
-        paths = plot_result(result, a.plots)
-        print(f"wrote {len(paths)} plots to {a.plots}")
-
-
-def _progress(a: argparse.Namespace):
-    return None if a.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
-
-
-def cmd_eval(a: argparse.Namespace) -> int:
-    srcs = _sources(a)
-    names = a.tracker or list(CONFIGURATIONS)
-    result = evaluate(srcs, names, a.pipeline, _progress(a), overrides=a.set or ())
-    _finish(result, a)
-    return 0
-
-
-def cmd_compare(a: argparse.Namespace) -> int:
-    if a.protocol:
-        return _compare_protocol(a)
-    from swir_tracker_ros.harness.compare import add_opencv
-
-    srcs = _sources(a)
-    reuse = EvalResult()
-    for path in a.reuse or []:
-        try:
-            reuse.merge(EvalResult.from_json(json.loads(Path(path).read_text())))
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise HarnessError(f"{path}: cannot reuse this result: {exc}") from None
-    variants = list(CONFIGURATIONS) if a.tracker is None else a.tracker
-    result = evaluate(srcs, variants, a.pipeline, _progress(a), reuse, a.set or ())
-    for name, per in result.sequences.items():  # reused OpenCV rows
-        per.update({k: v for k, v in reuse.sequences.get(name, {}).items() if k.startswith("opencv_")})
-    add_opencv(result, srcs, ["KCF", "CSRT", "MOSSE"] if a.opencv is None else a.opencv, _progress(a))
-    _finish(result, a)
-    return 0
-
-
-def _compare_protocol(a: argparse.Namespace) -> int:
-    """`compare --protocol ope sre`: OPE/SRE tables, false tracking, occlusions survived (protocol.py)."""
-    import os
-
-    from swir_tracker_ros.harness.protocol import (
-        ProtocolResult,
-        format_markdown,
-        format_protocol,
-        run_protocol,
-    )
-    if a.plots or a.curves:
-        raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
-    reuse = None
-    for path in a.reuse or []:
-        try:
-            old = ProtocolResult.from_json(json.loads(Path(path).read_text()))
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise HarnessError(f"{path}: cannot reuse this protocol result: {exc}") from None
-        if reuse is None:
-            reuse = old
-        else:
-            for seq, per in old.stats.items():
-                reuse.stats.setdefault(seq, {}).update(per)
-    variants = [DEFAULT_CONFIGURATION] if a.tracker is None else a.tracker
-    peers = ["KCF", "CSRT"] if a.opencv is None else a.opencv
-    cache = None if a.no_peer_cache else (a.peer_cache or os.environ.get("SWIR_PEER_CACHE")
-                                          or DEFAULT_PEER_CACHE)
-
-    def write(result: ProtocolResult, complete: bool = False) -> None:
-        if a.json:
-            Path(a.json).parent.mkdir(parents=True, exist_ok=True)
-            result.meta["complete"] = complete
-            Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
-
-    result = run_protocol(_sources(a), variants, peers, a.protocol, a.pipeline, a.sre_style, a.jobs, cache,
-                          _progress(a), reuse, write, a.set or ())
-    print(format_protocol(result))
-    if a.markdown:
-        Path(a.markdown).write_text(format_markdown(result) + "\n")
-        print(f"wrote {a.markdown}")
-    if a.json:
-        write(result, complete=True)
-        print(f"wrote {a.json}")
-    return 0
-
-
 def cmd_replay(a: argparse.Namespace) -> int:
+    # rclpy is imported only here: every other command runs without a ROS install
     from swir_tracker_ros.harness.replay import replay
 
     out = Path(a.out) if a.out else Path(str(Path(a.bag).resolve()) + "_replayed")
     res = replay(a.bag, out, a.rate, a.wait, a.grace)
-    result = EvalResult({Path(a.bag).name: {"tracker_node": res.score}})
-    print(format_table(result))
+    result = Results(labels=["tracker_node"])
+    result.add(Path(a.bag).name, "tracker_node", OPE, res.stats)
+    print(format_eval(result))
     print(f"{res.answered}/{res.frames} frames answered on /track/box; recording in {res.recorded}")
     return 0
 
 
-def cmd_regress(a: argparse.Namespace) -> int:
-    from swir_tracker_ros.harness.regress import (
-        DEFAULT_SEQUENCES,
-        config_path,
-        format_violations,
-        run_regression,
-    )
+def _stored_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--results", default=None,
+                   help="results directory of the stored runs (default: $SWIR_RESULTS or "
+                        f"{commands.DEFAULT_RESULTS})")
+    p.add_argument("--data", dest="data_dir", default=str(DEFAULT_SEQUENCES),
+                   help="the sequence folders: their sorted names give the two folds (default: %(default)s)")
+    p.add_argument("--peer-dir", default=str(DEFAULT_PEERS),
+                   help="stored runs of trackers outside the project, e.g. ecohc_py (default: %(default)s)")
+    p.add_argument("--sre-style", choices=SRE_STYLES, default="otb",
+                   help="SRE start boxes: the OTB toolkit's shiftInitBB (otb), rigid 10 %% shifts (shift), "
+                        "or the same 12 starts 1 px apart (pixel: the answer's stability; metrics.sre_box)")
+    p.add_argument("--markdown", default=None, help="also write the tables as Markdown")
+    p.add_argument("--json", default=None, help="write the scores as JSON")
+    p.add_argument("--quiet", action="store_true")
 
-    cfg = config_path(a.config or a.set)
-    result, violations = run_regression(cfg, Path(a.sequences or DEFAULT_SEQUENCES), _progress(a))
-    print(format_table(result))
-    if a.json:
-        Path(a.json).write_text(json.dumps(result.to_json(), indent=1))
-    if violations:
-        print(f"\nREGRESSION: {len(violations)} score(s) below the thresholds in {cfg}:")
-        print(format_violations(violations))
-        return 1
-    print(f"\nregression set {cfg.stem}: all scores at or above the thresholds in {cfg}")
-    return 0
+
+def _evaluation_parsers(sub: argparse._SubParsersAction) -> None:
+    names = (*configurations(), DEFAULT)
+
+    def eval_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("bags", nargs="+",
+                       help="bags, sequence folders, a folder of them, synth:NAME, synth:all")
+        p.add_argument("--tracker", "--configuration", nargs="*", choices=names, default=None, dest="tracker",
+                       help="our configurations (default: all; `compare --tracker` alone: peers only)")
+        p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                       help="override a parameter of our configurations (repeatable; dotted names for nested "
+                            "parameter groups; VALUE parsed as YAML); stored under a label of its own")
+        p.add_argument("--param", action="append", default=None, metavar="NAME=VALUE",
+                       help="the same as --set")
+        p.add_argument("--pipeline", default=None, help="short for --set pipeline=P")
+        p.add_argument("--label", default=None, help="store the runs of the one --tracker under this label")
+        p.add_argument("--frames", type=int, default=None, help="only the first N frames of each source")
+        p.add_argument("--image-topic", default=None)
+        p.add_argument("--gt-topic", default=None)
+        p.add_argument("--jobs", type=int, default=1, help="parallel (tracker, source) tasks")
+        p.add_argument("--rerun", action="store_true",
+                       help="play again, and replace, stored runs that other code or settings produced")
+        p.add_argument("--curves", action="store_true", help="also store the curves in the JSON")
+        p.add_argument("--plots", default=None, help="directory for precision/success PNGs")
+        p.add_argument("--reuse", nargs="+", default=None, help=argparse.SUPPRESS)  # gone: fails with a hint
+        p.add_argument("--peer-cache", default=None, help=argparse.SUPPRESS)  # gone: fails with a hint
+        p.add_argument("--no-peer-cache", action="store_true", help=argparse.SUPPRESS)
+        _stored_args(p)
+
+    p = sub.add_parser("eval", help="play our configurations over sources (OPE), store and score the runs")
+    eval_args(p)
+    p.set_defaults(func=commands.cmd_eval)
+
+    p = sub.add_parser("compare",
+                       help="eval plus OpenCV's trackers and stored peers; --protocol: OPE/SRE by fold")
+    eval_args(p)
+    p.add_argument("--opencv", nargs="*", default=None, choices=OPENCV_TRACKERS,
+                   help="OpenCV peers (default: KCF CSRT MOSSE; with --protocol: KCF CSRT; empty: none)")
+    p.add_argument("--peers", nargs="*", default=None,
+                   help="stored peers of --peer-dir to show beside (e.g. ecohc_py; nothing is run for them)")
+    p.add_argument("--protocol", nargs="+", choices=PROTOCOLS, default=None,
+                   help="OPE and/or SRE (12 perturbed starts), false tracking, occlusions survived, per fold")
+    p.set_defaults(func=commands.cmd_compare)
+
+    p = sub.add_parser("table", help="tables of stored runs only: labels side by side, per sequence and fold")
+    p.add_argument("labels", nargs="+",
+                   help="stored labels (measured, opencv_csrt, ...) or peers (ecohc_py)")
+    p.add_argument("--on", dest="bags", nargs="*", default=None, metavar="SRC",
+                   help="only these sources' runs (default: every sequence stored for the labels)")
+    p.add_argument("--protocol", nargs="+", choices=PROTOCOLS, default=list(PROTOCOLS))
+    p.add_argument("--frames", type=int, default=None, help="with --on: the runs on the first N frames")
+    p.add_argument("--allow-mixed", action="store_true",
+                   help="score runs of one label that different code or settings made together anyway")
+    _stored_args(p)
+    p.set_defaults(func=commands.cmd_table, image_topic=None, gt_topic=None)
+
+    p = sub.add_parser("verdict",
+                       help="two stored configurations on both folds (SRE): change, noise, verdict")
+    p.add_argument("base", help="stored label of the current default")
+    p.add_argument("candidate", help="stored label of the change")
+    p.add_argument("--metric", choices=GATED, default="success_auc")
+    p.add_argument("--on", dest="bags", nargs="*", default=None, metavar="SRC",
+                   help="only these sources' runs (default: every sequence stored for both)")
+    p.add_argument("--frames", type=int, default=None)
+    p.add_argument("--allow-mixed", action="store_true")
+    _stored_args(p)
+    p.set_defaults(func=commands.cmd_verdict, image_topic=None, gt_topic=None)
+
+
+def _regress_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("regress",
+                       help="gate a regression set on averaged protocols; exit 1 below a threshold")
+    p.add_argument("--set", default="full", help="regression set name in --regression-dir (full, ci)")
+    p.add_argument("--config", default=None, help="explicit regression YAML")
+    p.add_argument("--regression-dir", default=str(REGRESSION_DIR), help="where set names are looked up")
+    p.add_argument("--sequences", default=None,
+                   help=f"folder of the real sequences (default: {DEFAULT_SEQUENCES})")
+    p.add_argument("--results", default=None, help="keep the runs in this results directory and reuse them "
+                                                   "(default: fresh runs in a temporary directory)")
+    p.add_argument("--rerun", action="store_true", help="with --results: replace runs other code made")
+    p.add_argument("--param", action="append", default=None, metavar="NAME=VALUE",
+                   help="override a parameter of every configuration of the set (e.g. to show that a change "
+                        "that costs accuracy fails the gate)")
+    p.add_argument("--jobs", type=int, default=1)
+    p.add_argument("--json", default=None, help="write the scores of the set's runs as JSON")
+    p.add_argument("--measure", default=None, metavar="OUT",
+                   help="write the averaged values as JSON instead of gating (what --calibrate runs)")
+    p.add_argument("--calibrate", action="store_true",
+                   help="re-baseline: run the set in each numeric environment (--envs), print the thresholds "
+                        "with their spreads (--write: into the set's YAML)")
+    p.add_argument("--envs", nargs="+", default=["all"],
+                   help=f"numeric environments for --calibrate: {', '.join(ENVIRONMENTS)} or all")
+    p.add_argument("--write", action="store_true", help="--calibrate: rewrite the set's YAML")
+    p.add_argument("--margin-factor", type=float, default=2.0,
+                   help="--calibrate: margin = factor x spread ...")
+    p.add_argument("--margin-floor", type=float, default=0.02, help="... but at least this")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=commands.cmd_regress)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -269,47 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("bag")
     p.set_defaults(func=cmd_info)
 
-    def eval_args(p: argparse.ArgumentParser) -> None:
-        p.add_argument("bags", nargs="+", help="bags, sequence folders, a folder of them, or synth:NAME")
-        p.add_argument("--tracker", nargs="*", choices=tuple(CONFIGURATIONS), default=None,
-                       help="variants (default: all; `compare --tracker` alone: OpenCV only)")
-        p.add_argument("--pipeline", default=None,
-                       help="TrackerParams.pipeline (default: TrackerParams' own default)")
-        p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
-                       help="override a TrackerParams field for our variants (repeatable; dotted names for "
-                            "nested parameter groups; VALUE parsed as YAML)")
-        p.add_argument("--frames", type=int, default=None, help="only the first N frames of each source")
-        p.add_argument("--image-topic", default=None)
-        p.add_argument("--gt-topic", default=None)
-        p.add_argument("--json", default=None)
-        p.add_argument("--curves", action="store_true", help="also store the curves in the JSON")
-        p.add_argument("--plots", default=None, help="directory for precision/success PNGs")
-        p.add_argument("--quiet", action="store_true")
-
-    p = sub.add_parser("eval", help="replay sources through tracker variants and score them")
-    eval_args(p)
-    p.set_defaults(func=cmd_eval)
-
-    p = sub.add_parser("compare", help="eval plus OpenCV KCF/CSRT/MOSSE (run in .venv-bench)")
-    eval_args(p)
-    p.add_argument("--reuse", nargs="+", default=None,
-                   help="JSON results (--json ... --curves; with --protocol: protocol JSON) whose rows need "
-                        "not be run again")
-    p.add_argument("--opencv", nargs="*", default=None, choices=("KCF", "CSRT", "MOSSE"),
-                   help="OpenCV peers (default: KCF CSRT MOSSE; with --protocol: KCF CSRT; empty: none)")
-    p.add_argument("--protocol", nargs="+", choices=("ope", "sre"), default=None,
-                   help="issue-12 protocol: OPE and/or SRE (12 perturbed starts), false tracking, occlusions "
-                        "survived; our runs and peers on the same frames (docs/harness.md)")
-    p.add_argument("--jobs", type=int, default=1, help="--protocol: parallel (tracker, source) tasks")
-    p.add_argument("--sre-style", choices=SRE_STYLES, default="otb",
-                   help="SRE start boxes: the OTB toolkit's shiftInitBB (otb), rigid 10 %% shifts (shift), "
-                        "or the same 12 starts 1 px apart (pixel: the answer's stability; metrics.sre_box)")
-    p.add_argument("--peer-cache", default=None,
-                   help="--protocol: OpenCV results cache (default: $SWIR_PEER_CACHE or "
-                        f"{DEFAULT_PEER_CACHE})")
-    p.add_argument("--no-peer-cache", action="store_true", help="--protocol: always run the peers")
-    p.add_argument("--markdown", default=None, help="--protocol: also write the tables as Markdown")
-    p.set_defaults(func=cmd_compare)
+    _evaluation_parsers(sub)
 
     p = sub.add_parser("replay", help="publish a bag to ROS (with /clock), record /track/*, score")
     p.add_argument("bag")
@@ -319,13 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--grace", type=float, default=2.0, help="seconds to keep listening after the last frame")
     p.set_defaults(func=cmd_replay)
 
-    p = sub.add_parser("regress", help="eval the regression set; exit 1 when a score drops below threshold")
-    p.add_argument("--set", default="full", help="regression set name in test/regression (full, ci)")
-    p.add_argument("--config", default=None, help="explicit regression YAML")
-    p.add_argument("--sequences", default=None, help="folder of the real sequences")
-    p.add_argument("--json", default=None)
-    p.add_argument("--quiet", action="store_true")
-    p.set_defaults(func=cmd_regress)
+    _regress_parser(sub)
     return ap
 
 

@@ -1,86 +1,59 @@
 # SPDX-License-Identifier: Apache-2.0
-"""One-pass evaluation: replay sources through tracker variants as fast as possible and score them."""
+"""Our tracker under the harness: the one place that builds it from a configuration name, and the loop
+that plays it over a source from one or several start boxes (raw per-frame boxes and states)."""
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from copy import deepcopy
 from dataclasses import dataclass, field, fields, is_dataclass, replace
+from typing import Protocol
 
-import numpy as np
+import yaml
 
-from swir_tracker_ros.errors import HarnessError, SwirTrackerError
-from swir_tracker_ros.harness.metrics import Score, mean_scores, score, sre_box
+from swir_tracker_ros.configs import CONFIGURATIONS, DEFAULT_CONFIGURATION, configuration
+from swir_tracker_ros.errors import HarnessError, ParameterError, SwirTrackerError
+from swir_tracker_ros.harness.metrics import sre_box
 from swir_tracker_ros.harness.sources import Source
-from swir_tracker_ros.types import Box, TrackState
+from swir_tracker_ros.tracker import Tracker
+from swir_tracker_ros.tracker_params import TrackerParams
+from swir_tracker_ros.types import Box, TrackResult
 
-SUMMARY_FIELDS = ("precision_20", "success_auc", "center_error", "lost_frames", "fps")
-
-
-@dataclass
-class Run:
-    """Per-frame output of one tracker on one source."""
-
-    pred: list[Box | None]
-    gt: list[Box | None]
-    occluded: list[bool | None]
-    seconds: float
-    states: list[str] = field(default_factory=list)
-    occlusion: list[float | None] = field(default_factory=list)  # covered share (synthetic sources)
-    init: Box | None = None  # start box
-    init_index: int = 0  # frame of the start
-
-    def score(self) -> Score:
-        return score(self.pred, self.gt, self.seconds, self.occluded)
+DEFAULT = "default"  # the configuration name that stands for the tracker's default configuration
+BASE_KEYS = ("pipeline", "base_filter")  # override keys that choose the configuration's base filter
+OPE = "none"  # the start of the one-pass run: the ground-truth box itself
 
 
-@dataclass
-class EvalResult:
-    """Scores by sequence and variant, and the per-sequence mean by variant."""
+class TrackerLike(Protocol):
+    """What the harness needs of a tracker: `init(frame, box)` and `update(frame) -> TrackResult`."""
 
-    sequences: dict[str, dict[str, Score]] = field(default_factory=dict)
+    def init(self, frame, box: Box, bit_depth: int | None = None) -> None: ...
 
-    @property
-    def variants(self) -> list[str]:
-        seen: list[str] = []
-        for per in self.sequences.values():
-            seen += [v for v in per if v not in seen]
-        return seen
+    def update(self, frame, bit_depth: int | None = None) -> TrackResult: ...
 
-    def mean(self) -> dict[str, Score]:
-        out = {}
-        for v in self.variants:
-            scores = [per[v] for per in self.sequences.values() if v in per]
-            out[v] = mean_scores(scores)
-        return out
 
-    @classmethod
-    def from_json(cls, data: dict) -> EvalResult:
-        """Inverse of `to_json(curves=True)` (per-sequence rows; the mean is recomputed)."""
-        def unpack(d: dict) -> Score:
-            if "precision_curve" not in d:
-                raise HarnessError("a reused result needs its curves: write it with --json ... --curves")
-            vals = {k: (math.inf if v is None and k == "center_error" else v) for k, v in d.items()}
-            return Score(**vals)
+# --- Building trackers: the one place (swap these when the core's configurations change) ---------------
 
-        return cls({n: {v: unpack(d) for v, d in per.items()} for n, per in data["sequences"].items()})
+def configurations() -> tuple[str, ...]:
+    """Names of the tracker's configurations (swir_tracker_ros/configs/)."""
+    return tuple(CONFIGURATIONS)
 
-    def merge(self, other: EvalResult) -> EvalResult:
-        for name, per in other.sequences.items():
-            self.sequences.setdefault(name, {}).update(per)
-        return self
 
-    def to_json(self, curves: bool = False) -> dict:
-        def pack(s: Score) -> dict:
-            d = s.summary()
-            if curves:
-                d["precision_curve"], d["success_curve"] = s.precision_curve, s.success_curve
-            return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+def default_configuration() -> str:
+    """The name of the configuration the tracker runs by default."""
+    return DEFAULT_CONFIGURATION
 
-        return {"sequences": {n: {v: pack(s) for v, s in per.items()} for n, per in self.sequences.items()},
-                "mean": {v: pack(s) for v, s in self.mean().items()}}
+
+def resolve_configuration(name: str) -> str:
+    """`name` itself, or the default configuration's name for "default"; HarnessError listing the known
+    names for anything else."""
+    if name == DEFAULT:
+        return default_configuration()
+    if name not in configurations():
+        known = ", ".join((*configurations(), DEFAULT))
+        raise HarnessError(f"unknown configuration {name!r}; known: {known}")
+    return name
 
 
 def _set_path(obj: object, path: list[str], value: object, full: str) -> object:
@@ -91,47 +64,64 @@ def _set_path(obj: object, path: list[str], value: object, full: str) -> object:
     return replace(obj, **{path[0]: _set_path(getattr(obj, path[0]), path[1:], value, full)})
 
 
-def tracker_params(variant: str, pipeline: str | None = None, overrides: Sequence[str] = ()) -> object:
-    """`TrackerParams` of the named configuration `variant` (configs/): `pipeline` the base filter (None: the
-    configuration's own); `overrides` are `NAME=VALUE` strings (dotted names reach nested parameter
-    dataclasses, VALUE is parsed as YAML). Validated; a bad name or value is a HarnessError."""
-    import yaml
-
-    from swir_tracker_ros.configs import configuration
-    from swir_tracker_ros.errors import ParameterError
-
+def tracker_params(name: str, overrides: Sequence[str] = ()) -> TrackerParams:
+    """The parameters of configuration `name` with `overrides` applied: `NAME=VALUE` strings (dotted names
+    reach nested parameter dataclasses, VALUE is parsed as YAML; `pipeline=P` or `base_filter=P` builds the
+    configuration on base filter P). Validated; a bad name or value is a HarnessError."""
+    if isinstance(overrides, str):
+        raise HarnessError(f"overrides must be a list of NAME=VALUE strings, got the string {overrides!r}")
     try:
-        params = configuration(variant, pipeline)
+        pairs = []
         for item in overrides:
-            name, eq, text = item.partition("=")
-            if not eq or not name:
+            key, eq, text = item.partition("=")
+            if not eq or not key:
                 raise HarnessError(f"--set wants NAME=VALUE, got {item!r}")
-            params = _set_path(params, name.strip().split("."), yaml.safe_load(text), item)
+            pairs.append((key.strip(), yaml.safe_load(text), item))
+        bases = [str(v) for k, v, _ in pairs if k in BASE_KEYS]
+        params = configuration(resolve_configuration(name), bases[-1] if bases else None)
+        for key, value, item in pairs:
+            if key not in BASE_KEYS:
+                params = _set_path(params, key.split("."), value, item)
         params.validate()
     except (ParameterError, TypeError, yaml.YAMLError) as exc:
         raise HarnessError(f"tracker parameters: {exc}") from None
     return params
 
 
-def make_tracker_factory(variant: str, pipeline: str | None = None,
-                         overrides: Sequence[str] = ()) -> Callable[[], object]:
-    """A zero-argument constructor of the core `Tracker` for one variant (`tracker_params`)."""
-    from swir_tracker_ros.tracker import Tracker
-
-    params = tracker_params(variant, pipeline, overrides)
+def make_tracker_factory(name: str, overrides: Sequence[str] = ()) -> Callable[[], TrackerLike]:
+    """A zero-argument constructor of our tracker in configuration `name` (`tracker_params`)."""
+    params = tracker_params(name, overrides)
     return lambda: Tracker(deepcopy(params))
 
 
-def run_starts(source: Source, factory: Callable[[], object], starts: Sequence[str] = ("none",),
+# --- Playing a tracker over a source ----------------------------------------------------------------------
+
+@dataclass
+class Run:
+    """Per-frame output of one tracker on one source from one start: the boxes and states as the tracker
+    reported them (the scoring convention is applied when the run is scored, `protocol.RunStats.of`)."""
+
+    pred: list[Box | None]
+    gt: list[Box | None]
+    occluded: list[bool | None]
+    seconds: float
+    states: list[str] = field(default_factory=list)
+    occlusion: list[float | None] = field(default_factory=list)  # covered share (synthetic sources)
+    init: Box | None = None  # start box
+    init_index: int = 0  # frame of the start
+
+
+def run_starts(source: Source, factory: Callable[[], TrackerLike], starts: Sequence[str] = (OPE,),
                style: str = "otb", init: Box | None = None) -> dict[str, Run]:
     """Run one tracker per start side by side over one decoding of `source` (OPE and SRE starts).
 
     Each start inits its own tracker on the first frame that has ground truth, with the ground-truth box
     (`none`), an SRE perturbation of it (`metrics.sre_box`, `style`) or the explicit `init` box (key "init"),
-    and updates on every later frame; each tracker is timed on its own.
+    and updates on every later frame; each tracker is timed on its own. Frames before the start have no
+    box and state `idle`; every later frame has the box and state the tracker reported.
     """
     keys = ["init"] if init is not None else list(starts)
-    trackers: dict[str, object] = {}
+    trackers: dict[str, TrackerLike] = {}
     runs = {k: Run([], [], [], 0.0, []) for k in keys}
     gts: list[Box | None] = []
     occ: list[bool | None] = []
@@ -172,8 +162,7 @@ def run_starts(source: Source, factory: Callable[[], object], starts: Sequence[s
                 raise HarnessError(f"{source.name}: tracker update failed on frame {fr.index}: "
                                    f"{exc}") from None
             r.seconds += time.perf_counter() - t0
-            lost = res.state in (TrackState.LOST, TrackState.IDLE) or not res.box.is_valid()
-            r.pred.append(None if lost else res.box)
+            r.pred.append(res.box)
             r.states.append(res.state.value)
     if not trackers:
         raise HarnessError(f"{source.name}: no frame with ground truth; nothing to track")
@@ -182,51 +171,6 @@ def run_starts(source: Source, factory: Callable[[], object], starts: Sequence[s
     return runs
 
 
-def run_source(source: Source, factory: Callable[[], object]) -> Run:
+def run_source(source: Source, factory: Callable[[], TrackerLike]) -> Run:
     """OPE: init on the first frame that has ground truth, update on every later frame, time the tracker."""
-    return run_starts(source, factory)["none"]
-
-
-def evaluate(sources: Sequence[Source], variants: Sequence[str], pipeline: str | None = None,
-             progress: Callable[[str], None] | None = None, reuse: EvalResult | None = None,
-             overrides: Sequence[str] = ()) -> EvalResult:
-    """Score every variant on every source (sequence names must be unique); rows in `reuse` are kept."""
-    result = EvalResult()
-    factories: dict[str, Callable[[], object]] = {}  # one validated TrackerParams per variant, built once
-    for src in sources:
-        if src.name in result.sequences:
-            raise HarnessError(f"two sources are both called {src.name!r}")
-        result.sequences[src.name] = {}
-        for v in variants:
-            if reuse is not None and v in reuse.sequences.get(src.name, {}):
-                result.sequences[src.name][v] = reuse.sequences[src.name][v]
-                continue
-            if v not in factories:
-                factories[v] = make_tracker_factory(v, pipeline, overrides)
-            run = run_source(src, factories[v])
-            s = run.score()
-            result.sequences[src.name][v] = s
-            if progress:
-                progress(f"{src.name:<32} {v:<18} P@20 {s.precision_20:.3f}  AUC {s.success_auc:.3f}  "
-                         f"{s.fps:6.1f} fps")
-    return result
-
-
-def format_table(result: EvalResult, fields: Sequence[str] = SUMMARY_FIELDS) -> str:
-    """Plain-text table: one row per (sequence, variant) and the per-sequence mean at the bottom."""
-    head = f"{'sequence':<30} {'variant':<18} " + " ".join(f"{f:>13}" for f in fields)
-    lines = [head, "-" * len(head)]
-
-    def row(name: str, v: str, s: Score) -> str:
-        cells = []
-        for f in fields:
-            val = getattr(s, f)
-            cells.append(f"{val:>13d}" if isinstance(val, int) else
-                         f"{'-':>13}" if val is None or not np.isfinite(val) else f"{val:>13.3f}")
-        return f"{name:<30} {v:<18} " + " ".join(cells)
-
-    for name, per in result.sequences.items():
-        lines += [row(name, v, s) for v, s in per.items()]
-    lines.append("-" * len(head))
-    lines += [row("MEAN", v, s) for v, s in result.mean().items()]
-    return "\n".join(lines)
+    return run_starts(source, factory)[OPE]

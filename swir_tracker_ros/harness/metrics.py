@@ -16,6 +16,29 @@ PRECISION_THRESHOLDS = np.arange(0, 51, dtype=np.float64)  # pixels, OTB default
 SUCCESS_THRESHOLDS = np.round(np.arange(0, 21) * 0.05, 2)  # IoU 0, 0.05, ..., 1 (21 values)
 
 
+FAILED_STATES = frozenset({"lost", "idle"})  # states in which a tracker reports that it has no target
+
+
+def scored_boxes(pred: Sequence[Box | None], states: Sequence[str]) -> list[Box | None]:
+    """The boxes a run is scored with, one rule for every tracker: a frame on which the tracker reports
+    failure (state `lost` or `idle`; OpenCV's ok False is stored as `lost`) keeps the last box scored
+    before it, as an application keeps showing it. In any other state the reported box is scored; a
+    frame without a usable box there (a node that did not answer) scores as no box."""
+    if len(pred) != len(states):
+        raise HarnessError(f"{len(pred)} boxes for {len(states)} states")
+    out: list[Box | None] = []
+    last: Box | None = None
+    for box, state in zip(pred, states):
+        if state in FAILED_STATES:
+            out.append(last)
+        elif box is not None and box.is_valid():
+            out.append(box)
+            last = box
+        else:
+            out.append(None)
+    return out
+
+
 def center_errors(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> np.ndarray:
     """Euclidean centre distance per frame with ground truth; inf where the tracker gave no box.
 
@@ -98,25 +121,6 @@ def score(pred: Sequence[Box | None], gt: Sequence[Box | None], seconds: float =
         occluded_precision_20=occ_p20,
         precision_curve=[float(v) for v in pc],
         success_curve=[float(v) for v in sc],
-    )
-
-
-def mean_scores(scores: Sequence[Score]) -> Score:
-    """Per-sequence mean of the scores and curves (each sequence weighs the same)."""
-    if not scores:
-        raise HarnessError("no scores to average")
-    occ = [s.occluded_precision_20 for s in scores if s.occluded_precision_20 is not None]
-    fin = [s.center_error for s in scores if math.isfinite(s.center_error)]
-    return Score(
-        precision_20=float(np.mean([s.precision_20 for s in scores])),
-        success_auc=float(np.mean([s.success_auc for s in scores])),
-        center_error=float(np.mean(fin)) if fin else math.inf,
-        lost_frames=int(sum(s.lost_frames for s in scores)),
-        fps=float(np.mean([s.fps for s in scores])),
-        frames=int(sum(s.frames for s in scores)),
-        occluded_precision_20=float(np.mean(occ)) if occ else None,
-        precision_curve=list(np.mean([s.precision_curve for s in scores], axis=0)),
-        success_curve=list(np.mean([s.success_curve for s in scores], axis=0)),
     )
 
 

@@ -10,16 +10,18 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import numpy as np
 
-from swir_tracker_ros.harness.evaluate import EvalResult
-from swir_tracker_ros.harness.metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS, Score
+from swir_tracker_ros.harness.evaluate import OPE
+from swir_tracker_ros.harness.metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
+from swir_tracker_ros.harness.protocol import Results, RunStats
 
 
 def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
 
 
-def plot_pair(scores: dict[str, Score], title: str, out_dir: Path) -> list[Path]:
+def plot_pair(scores: dict[str, RunStats], title: str, out_dir: Path) -> list[Path]:
     """precision_<title>.png (legend: P@20) and success_<title>.png (legend: AUC), one line per tracker."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -48,11 +50,24 @@ def plot_pair(scores: dict[str, Score], title: str, out_dir: Path) -> list[Path]
     return paths
 
 
-def plot_result(result: EvalResult, out_dir: Path | str) -> list[Path]:
-    """Curves of every sequence and of the mean over sequences."""
+def mean_curves(runs: list[RunStats]) -> RunStats:
+    """The per-sequence mean of a tracker's curves (each sequence weighs the same)."""
+    return RunStats(float(np.mean([r.success_auc for r in runs])),
+                    float(np.mean([r.precision_20 for r in runs])),
+                    0, 0, sum(r.frames for r in runs), 0.0,
+                    precision_curve=list(np.mean([r.precision_curve for r in runs], axis=0)),
+                    success_curve=list(np.mean([r.success_curve for r in runs], axis=0)))
+
+
+def plot_result(results: Results, out_dir: Path | str) -> list[Path]:
+    """OPE curves of every sequence and of the mean over sequences."""
     out = Path(out_dir)
     paths = []
-    for name, per in result.sequences.items():
-        paths += plot_pair(per, name, out)
-    paths += plot_pair(result.mean(), "mean", out)
+    for name, per in results.stats.items():
+        ope = {t: runs[OPE] for t, runs in per.items() if OPE in runs}
+        if ope:
+            paths += plot_pair(ope, name, out)
+    ope = {t: [per[t][OPE] for per in results.stats.values() if OPE in per.get(t, {})]
+           for t in results.labels}
+    paths += plot_pair({t: mean_curves(runs) for t, runs in ope.items() if runs}, "mean", out)
     return paths

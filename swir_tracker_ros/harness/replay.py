@@ -21,7 +21,8 @@ from msg_adapters.stamps import clock_msg, msg_ns, ns_to_stamp
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC, BagReader
-from swir_tracker_ros.harness.metrics import Score, score
+from swir_tracker_ros.harness.evaluate import Run
+from swir_tracker_ros.harness.protocol import RunStats
 from swir_tracker_ros.types import Box
 
 RECORDED = tuple(topics.absolute(t) for t in (topics.TRACK_BOX, topics.TRACK_STATE, topics.PAN_TILT_ERROR))
@@ -30,7 +31,7 @@ PLAYED = (IMAGE_TOPIC, INFO_TOPIC, GT_TOPIC, OCCLUDED_TOPIC)
 
 @dataclass
 class ReplayResult:
-    score: Score
+    stats: RunStats  # frames after the start scored; an unanswered frame scores as no box
     recorded: Path
     frames: int
     answered: int  # frames for which a /track/box arrived
@@ -127,12 +128,19 @@ def replay(bag: Path | str, out: Path | str, rate: float = 1.0, wait_s: float = 
             m = mb.deserialize(raw, topics.TYPES[topics.TRACK_BOX])
             boxes[msg_ns(m)] = box_from_polygon(m)
     stamps = sorted(gt_stamps)
+    gts = [gt_stamps[x] for x in stamps]
+    first = next(k for k, g in enumerate(gts) if g is not None)
     pred = [boxes.get(s) for s in stamps]
-    pred[0] = gt_stamps[stamps[0]] if pred[0] is None else pred[0]
-    s = score(pred, [gt_stamps[x] for x in stamps], 0.0, [occluded.get(x) for x in stamps])
+    pred[first] = gts[first] if pred[first] is None else pred[first]
+    # the node's box is scored as it was published (state "reported"); a frame it did not answer is a miss
+    states = ["idle"] * first + ["init"]
+    states += ["reported" if x in boxes else "unanswered" for x in stamps[first + 1:]]
+    period = (stamps[-1] - stamps[0]) / (len(stamps) - 1) if len(stamps) > 1 else 4e7
+    stats = RunStats.of(Run(pred, gts, [occluded.get(x) for x in stamps], 0.0, states, [None] * len(stamps),
+                            gts[first], first), 1e9 / period)
     answered = sum(1 for x in stamps if x in boxes)
-    s.fps = answered / played_s if played_s > 0 else 0.0
-    return ReplayResult(s, recorded, len(stamps), answered)
+    stats.fps = answered / played_s if played_s > 0 else 0.0
+    return ReplayResult(stats, recorded, len(stamps), answered)
 
 
 def _write_recording(out: Path, received: list[tuple[str, int, bytes]]) -> Path:

@@ -1,10 +1,13 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Frame sources the harness scores: rosbag2 bags, sequence folders (PNG + gt.txt) and synthetic scenarios."""
+"""Frame sources the harness scores: rosbag2 bags, sequence folders (PNG or JPEG frames + gt.txt) and
+synthetic scenarios."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from itertools import islice
@@ -19,6 +22,8 @@ from swir_tracker_ros.types import Box
 
 SYNTH_PREFIX = "synth:"
 T0_NS = 1_000_000_000  # stamp of frame 0 in bags we write (1 s after the epoch, never 0)
+FRAME_SUFFIXES = (".png", ".jpg", ".jpeg")  # sequence folders: 8/16-bit PNG or 8-bit gray JPEG frames
+SCENE_DIR = Path(__file__).resolve().parents[1] / "scene"
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,11 @@ class Source:
     meta: dict = field(default_factory=dict)
     image_topic: str | None = None
     gt_topic: str | None = None
+
+    @property
+    def key(self) -> str:
+        """The name runs of this source are stored under: the name, plus `@N` when only N frames are used."""
+        return self.name if not self.max_frames else f"{self.name}@{self.max_frames}"
 
     def frames(self) -> Iterator[FrameRecord]:
         if self.kind == "bag":
@@ -118,23 +128,50 @@ def _occluded_set(meta: dict) -> set[int] | None:
     return {int(f) for f in frames} if frames is not None else None
 
 
+def frame_files(path: Path) -> list[Path]:
+    """The frames of a sequence folder in name order: `*.png`, `*.jpg` or `*.jpeg` (one kind per folder)."""
+    return sorted(f for f in path.iterdir() if f.suffix.lower() in FRAME_SUFFIXES)
+
+
+def parse_gt_line(line: str, where: Path, number: int) -> Box | None:
+    """One gt.txt line, `x,y,w,h` separated by commas, tabs or spaces; None for a box without area."""
+    parts = [v for v in re.split(r"[,\s]+", line.strip()) if v]
+    try:
+        x, y, w, h = (float(v) for v in parts[:4])
+    except ValueError:
+        raise HarnessError(f"{where}: line {number} is not x,y,w,h: {line!r}") from None
+    return Box(x, y, w, h) if w > 0 and h > 0 else None
+
+
+def read_gt(path: Path) -> list[Box | None]:
+    """A sequence folder's gt.txt, one box per frame (blank lines skipped)."""
+    gt_file = path / "gt.txt"
+    try:
+        lines = [ln for ln in gt_file.read_text().splitlines() if ln.strip()]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise HarnessError(f"{gt_file}: cannot be read: {exc}") from None
+    return [parse_gt_line(ln, gt_file, k + 1) for k, ln in enumerate(lines)]
+
+
+def read_frame(img_path: Path) -> np.ndarray:
+    """One frame as stored (8/16-bit PNG, 8-bit JPEG); a 3-channel file is turned to gray (BT.601)."""
+    image = cv2.imread(str(img_path), cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise HarnessError(f"{img_path}: unreadable image")
+    if image.ndim == 3:
+        image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
+    return image
+
+
 def _sequence_frames(path: Path, fps: float, meta: dict) -> Iterator[FrameRecord]:
-    gt_lines = [ln for ln in (path / "gt.txt").read_text().splitlines() if ln.strip()]
-    images = sorted(path.glob("*.png"))
-    if len(images) != len(gt_lines):
-        raise HarnessError(f"{path}: {len(images)} PNG frames but {len(gt_lines)} lines in gt.txt")
+    gts = read_gt(path)
+    images = frame_files(path)
+    if len(images) != len(gts):
+        raise HarnessError(f"{path}: {len(images)} frames (PNG/JPEG) but {len(gts)} boxes in gt.txt")
     occ = _occluded_set(meta)
-    for k, (img_path, line) in enumerate(zip(images, gt_lines)):
-        image = cv2.imread(str(img_path), cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise HarnessError(f"{img_path}: unreadable image")
-        try:
-            x, y, w, h = (float(v) for v in line.replace("\t", ",").split(",")[:4])
-        except ValueError:
-            raise HarnessError(f"{path / 'gt.txt'}: line {k + 1} is not x,y,w,h: {line!r}") from None
-        gt = Box(x, y, w, h) if w > 0 and h > 0 else None
+    for k, (img_path, gt) in enumerate(zip(images, gts)):
         flag = (k + 1) in occ if occ is not None else None
-        yield FrameRecord(T0_NS + round(k * 1e9 / fps), image, gt, flag, k)
+        yield FrameRecord(T0_NS + round(k * 1e9 / fps), read_frame(img_path), gt, flag, k)
 
 
 def _synth_frames(name: str, fps: float) -> Iterator[FrameRecord]:
@@ -156,3 +193,26 @@ def convert_bits(image: np.ndarray, src_bits: int, dst_bits: int) -> np.ndarray:
     scale = ((1 << dst_bits) - 1) / ((1 << src_bits) - 1)
     out = np.rint(image.astype(np.float64) * scale)
     return out.astype(np.uint8 if dst_bits == 8 else np.uint16)
+
+
+def source_fingerprint(src: Source) -> str:
+    """Content identity of a source (part of every stored run's provenance): gt.txt and the frame files'
+    names and sizes of a folder, the scene code of a synthetic scenario, file names and sizes of a bag;
+    plus the name, kind and --frames limit."""
+    h = hashlib.sha1(f"{src.kind}:{src.name}:{src.max_frames}".encode())
+    loc = Path(src.location)
+    if src.kind == "sequence":
+        lines = [ln for ln in (loc / "gt.txt").read_text().splitlines() if ln.strip()]
+        h.update("\n".join(lines[:src.max_frames] if src.max_frames else lines).encode())
+        files = frame_files(loc)
+        for f in files[:src.max_frames] if src.max_frames else files:
+            h.update(f"{f.name}:{f.stat().st_size}".encode())
+    elif src.kind == "synth":
+        for f in sorted(SCENE_DIR.glob("*.py")):
+            h.update(f.read_bytes())
+    else:
+        files = sorted(loc.rglob("*")) if loc.is_dir() else [loc]
+        for f in files:
+            if f.is_file():
+                h.update(f"{f.name}:{f.stat().st_size}".encode())
+    return h.hexdigest()[:16]

@@ -1,0 +1,211 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The harness's evaluation commands: eval and compare play and store runs, table and verdict score stored
+runs, regress gates a regression set (docs/harness.md). The parser is in `cli`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.analysis import DEFAULT_SEQUENCES, load_results
+from swir_tracker_ros.harness.compare import OPENCV_TRACKERS
+from swir_tracker_ros.harness.evaluate import OPE, configurations, default_configuration
+from swir_tracker_ros.harness.folds import fold_changes, format_verdict
+from swir_tracker_ros.harness.gate import GateConfig, check, format_gate, load_config
+from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS
+from swir_tracker_ros.harness.numerics import check_names
+from swir_tracker_ros.harness.plots import plot_result
+from swir_tracker_ros.harness.protocol import Results
+from swir_tracker_ros.harness.regress import (
+    config_path,
+    measure_in_envs,
+    recalibrate,
+    run_set,
+    values_json,
+)
+from swir_tracker_ros.harness.runner import Player, play, protocol_starts
+from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, open_source
+from swir_tracker_ros.harness.store import RunStore
+from swir_tracker_ros.harness.tables import format_eval, format_markdown, format_text
+from swir_tracker_ros.scene import scenarios
+
+DEFAULT_RESULTS = "out/results"
+
+
+def results_dir(a: argparse.Namespace) -> RunStore:
+    """--results, else $SWIR_RESULTS, else out/results (relative to the working directory)."""
+    return RunStore(a.results or os.environ.get("SWIR_RESULTS") or DEFAULT_RESULTS)
+
+
+def progress(a: argparse.Namespace) -> Callable[[str], None] | None:
+    return None if a.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+
+
+def sources(a: argparse.Namespace) -> list[Source]:
+    """The sources named on the command line: bags, sequence folders, folders of them, synth:NAME and
+    synth:all."""
+    out = []
+    for spec in a.bags:
+        if spec == SYNTH_PREFIX + "all":  # every synthetic scenario (`harness synth --list`)
+            out += [open_source(SYNTH_PREFIX + n, a.frames) for n in scenarios()]
+            continue
+        p = Path(spec)
+        if p.is_dir() and not (p / "gt.txt").exists() and not (p / "metadata.yaml").exists() \
+                and any((c / "gt.txt").exists() for c in p.iterdir() if c.is_dir()):
+            out += [open_source(c, a.frames, a.image_topic, a.gt_topic) for c in sorted(p.iterdir())
+                    if (c / "gt.txt").exists()]  # a folder of sequence folders
+        else:
+            out.append(open_source(spec, a.frames, a.image_topic, a.gt_topic))
+    return out
+
+
+def _gone(a: argparse.Namespace) -> None:
+    """The spellings of the cached-peer era fail with what to do instead."""
+    if getattr(a, "reuse", None):
+        raise HarnessError("--reuse is gone: every run is stored under --results DIR (default "
+                           f"{DEFAULT_RESULTS}) and taken from there when it is played again")
+    if getattr(a, "peer_cache", None) or getattr(a, "no_peer_cache", False):
+        raise HarnessError("--peer-cache is gone: OpenCV's runs are stored under --results DIR with every "
+                           "other run (use the same --results to reuse them)")
+
+
+def players(a: argparse.Namespace, names: list[str]) -> list[Player]:
+    overrides = [*(a.set or []), *(a.param or [])] + ([f"pipeline={a.pipeline}"] if a.pipeline else [])
+    if a.label and len(names) != 1:
+        raise HarnessError("--label names the runs of one configuration; give one --tracker with it")
+    return [Player.ours(n, overrides, a.label) for n in names]
+
+
+def _play_and_load(a: argparse.Namespace, ours: list[Player], peers: list[str], starts: tuple[str, ...],
+                   style: str) -> Results:
+    store = results_dir(a)
+    srcs = sources(a)
+    everyone = ours + [Player.opencv(t) for t in peers]
+    play(srcs, everyone, starts, style, store, a.jobs, a.rerun, progress(a))
+    labels = [p.label for p in everyone] + list(getattr(a, "peers", None) or [])
+    return load_results(store, labels, [s.key for s in srcs], starts, style, Path(a.data_dir),
+                        Path(a.peer_dir))
+
+
+def _write_json(path: str | None, results: Results, curves: bool = False) -> None:
+    if path:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(json.dumps(results.to_json(curves), indent=1))
+        print(f"wrote {path}")
+
+
+def _finish_eval(results: Results, a: argparse.Namespace) -> None:
+    print(format_eval(results))
+    _write_json(a.json, results, a.curves)
+    if a.plots:
+        paths = plot_result(results, a.plots)
+        print(f"wrote {len(paths)} plots to {a.plots}")
+
+
+def cmd_eval(a: argparse.Namespace) -> int:
+    _gone(a)
+    names = a.tracker or list(configurations())
+    results = _play_and_load(a, players(a, names), [], (OPE,), "otb")
+    _finish_eval(results, a)
+    return 0
+
+
+def cmd_compare(a: argparse.Namespace) -> int:
+    """Our configurations and OpenCV's trackers: OPE as `eval` prints it, or with --protocol the protocol
+    tables per fold; stored peers (--peers) join the tables."""
+    _gone(a)
+    if a.protocol is None:
+        names = list(configurations()) if a.tracker is None else a.tracker
+        peers = list(OPENCV_TRACKERS) if a.opencv is None else a.opencv
+        _finish_eval(_play_and_load(a, players(a, names), peers, (OPE,), "otb"), a)
+        return 0
+    if a.plots or a.curves:
+        raise HarnessError("--plots and --curves belong to the plain compare, not to --protocol")
+    names = [default_configuration()] if a.tracker is None else a.tracker
+    peers = ["KCF", "CSRT"] if a.opencv is None else a.opencv
+    results = _play_and_load(a, players(a, names), peers, protocol_starts(a.protocol), a.sre_style)
+    _print_tables(results, a)
+    return 0
+
+
+def _print_tables(results: Results, a: argparse.Namespace) -> None:
+    print(format_text(results))
+    if a.markdown:
+        Path(a.markdown).write_text(format_markdown(results) + "\n")
+        print(f"wrote {a.markdown}")
+    _write_json(a.json, results)
+
+
+def _stored(a: argparse.Namespace, labels: list[str], starts: tuple[str, ...]) -> Results:
+    keys = [s.key for s in sources(a)] if a.bags else None
+    return load_results(results_dir(a), labels, keys, starts, a.sre_style, Path(a.data_dir), Path(a.peer_dir),
+                        a.allow_mixed)
+
+
+def cmd_table(a: argparse.Namespace) -> int:
+    """Tables of stored runs only (nothing is played)."""
+    results = _stored(a, a.labels, protocol_starts(a.protocol))
+    if not results.stats:
+        raise HarnessError(f"no stored runs of {', '.join(a.labels)} in {results_dir(a).root}")
+    _print_tables(results, a)
+    return 0
+
+
+def cmd_verdict(a: argparse.Namespace) -> int:
+    """Two stored configurations on both folds (SRE) and the team's rule."""
+    results = _stored(a, [a.base, a.candidate], SRE_PERTURBATIONS)
+    print(format_verdict(a.base, a.candidate, fold_changes(results, a.base, a.candidate, metric=a.metric),
+                         a.metric))
+    return 0
+
+
+def cmd_regress(a: argparse.Namespace) -> int:
+    cfg = load_config(config_path(a.config or a.set, Path(a.regression_dir)))
+    seqs = Path(a.sequences or DEFAULT_SEQUENCES)
+    if a.calibrate:
+        return _calibrate(a, cfg, seqs)
+    with tempfile.TemporaryDirectory(prefix="harness-regress-") as tmp:
+        store = RunStore(a.results or tmp)  # without --results: fresh runs of the current code
+        run = run_set(cfg, seqs, store, a.jobs, a.rerun, a.param or (), progress(a))
+    if a.json:
+        _write_json(a.json, run.results)
+    if a.measure:
+        Path(a.measure).write_text(json.dumps(values_json(cfg, run.values), indent=1))
+        print(f"wrote {a.measure}")
+        return 0
+    print(format_gate(run.values, cfg.thresholds))
+    violations = check(run.values, cfg.thresholds)
+    if violations:
+        print(f"\nREGRESSION: {len(violations)} value(s) below the thresholds in {cfg.path}:")
+        for v in violations:
+            print(f"  {v.sequence} {v.configuration} {v.metric}: {v.value:.3f} < min "
+                  f"{v.threshold.minimum:.3f} "
+                  f"({v.delta:+.3f}; spread {v.threshold.spread:.3f})")
+        return 1
+    print(f"\nregression set {cfg.name}: all {len(cfg.thresholds)} averaged values at or above the "
+          "thresholds "
+          f"in {cfg.path}")
+    return 0
+
+
+def _calibrate(a: argparse.Namespace, cfg: GateConfig, seqs: Path) -> int:
+    envs = check_names(a.envs)
+    root = Path(a.results or os.environ.get("SWIR_RESULTS") or DEFAULT_RESULTS) / "numerics"
+    measured = measure_in_envs(cfg, envs, root, seqs, a.jobs, progress(a))
+    thresholds, text = recalibrate(cfg, measured, a.margin_factor, a.margin_floor)
+    width = max(len(e) for e in envs)
+    for key in sorted(thresholds):
+        vals = "  ".join(f"{e:>{width}} {measured[e][key]:.4f}" for e in envs)
+        print(f"{' / '.join(key):<60} {vals}", file=sys.stderr)
+    if a.write:
+        cfg.path.write_text(text)
+        print(f"wrote {cfg.path}")
+    else:
+        print(text)
+    return 0
