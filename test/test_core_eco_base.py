@@ -51,14 +51,16 @@ def test_the_scale_search_is_one_eco_detection_for_every_window(scene) -> None:
     assert ScaleSearch(ScaleSearchParams()).factors(bank, 5) == res.factors  # no wide sizes: ECO's own scale
 
 
-def test_failure_by_the_peak_and_redetection_in_the_grid(scene) -> None:
-    """A search window far from the jogger gives a peak under `failure_peak`; the 3x3 grid around a
-    prediction a window's step beside him finds him again."""
+def test_failure_by_the_psr_and_redetection_in_the_grid(scene) -> None:
+    """After frames on the jogger, a search window far from him fails the PSR test (below the fraction of
+    the passed frames' mean); the 3x3 grid around a prediction a window's step beside him finds him again."""
     frames, gts = scene
     bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
     bank.initialise(frames[0], gts[0])
+    on = [bank.detect(frames[k], [window(bank, gts[k])])[0] for k in (1, 2, 3)]
+    assert not any(bank.failed(d) for d in on) and min(d.psr for d in on) > 15.0
     far = bank.detect(frames[2], [window(bank, gts[2], dx=-120.0)])[0]
-    assert bank.failed(far) and not bank.confident(far)
+    assert bank.failed(far) and far.psr < bank.fp.failure_psr_ratio * np.mean([d.psr for d in on])
     pred = gts[2].shifted(gts[2].w * (1.0 + bank.padding) * 2.0 / 3.0, 0.0)
     verdict = OcclusionVerdict(OcclusionParams(), bank.failed, bank.psr_reacquisition)
     scales = ScaleSearch(ScaleSearchParams(n=1)).search(bank, frames[2], pred, verdict)
