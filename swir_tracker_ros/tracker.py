@@ -63,7 +63,7 @@ class _Track:
         remembers = p.memory is not None and p.memory.ratio > 0
         self.memory = AppearanceMemory(p.memory, bank) if remembers else None
         self.motion = MotionFilter(p.motion, bank, box) if p.motion is not None else None
-        stateless = bank.psr_reacquisition  # failure tests without state: a second call changes nothing
+        stateless = bank.stateless_failure  # a second call of the failure test changes nothing
         self.lookalike = (LookalikeGuard(p.lookalike, self.trail)
                           if p.lookalike is not None and p.lookalike.frames > 0 and stateless else None)
         self.sweep = (LongLossSweep(p.sweep, p.redetection)

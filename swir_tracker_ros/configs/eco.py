@@ -6,6 +6,7 @@ filter's prediction, learning only on frames that pass the test."""
 from __future__ import annotations
 
 from swir_tracker_ros.configs.bases import base_params
+from swir_tracker_ros.policies.motion import MotionParams
 from swir_tracker_ros.policies.occlusion import OcclusionParams
 from swir_tracker_ros.policies.redetection import RedetectionParams
 from swir_tracker_ros.policies.scale_search import ScaleSearchParams
@@ -17,6 +18,7 @@ def params(base: str | None = None) -> TrackerParams:
     return TrackerParams(
         base=base_params(base, default="eco"),
         scale=ScaleSearchParams(n=1, climb=False, redetect_scales=0.0),  # ECO's own scale estimate
+        motion=MotionParams(size_velocity=False),  # ECO measures the size: smoothed, not extrapolated
         occlusion=OcclusionParams(reacquire_peak_ratio=0.0, reacquire_psr=0.0),
         redetection=RedetectionParams(lattice_step=0.0, prior=0.0),
         memory=None,

@@ -47,6 +47,9 @@ class BaseFilter(MultiWindow, ABC):
     threshold_map: ClassVar[ThresholdMap]  # peak -> Huber threshold (paper 000 eq. 38 / dissertation eq. 6.9)
     # (ours) re-acquisition also needs PSR >= `redetect_psr`: only filters whose PSRs that bar was measured on
     psr_reacquisition: ClassVar[bool] = False
+    # a failure test without state (a second call on the same detection changes nothing): the policies that
+    # test other windows than the frame's own (look-alike guard, long-loss sweep) need one
+    stateless_failure: ClassVar[bool] = False
 
     def __init__(self, fp: Any, w: float, h: float) -> None:
         self.fp = fp

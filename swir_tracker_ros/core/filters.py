@@ -35,6 +35,7 @@ class KCFFilter(BaseFilter):
     robust_method = "A4"
     threshold_map = PAPER000_KCF
     psr_reacquisition = True
+    stateless_failure = True
 
     def _build(self) -> KCF:
         return KCF(self.fp, self.shape, self.target_cells)

@@ -32,15 +32,16 @@ from swir_tracker_ros.types import Box
 class ECOBase:
     """ECO behind the base-filter surface the tracker's policies use (module docstring).
 
-    Failure (`failed`) tests the detection's PSR against `failure_psr` (paper 000's PSR < 7) and against a
-    fraction of its mean over the frames that passed (docs/eco.md, the loss signal); a failed frame does not
-    teach the filter. The Kalman box model is paper 000's (7 states) with
+    Failure (`failed`) tests the detection's PSR against `failure_psr` (paper 000's PSR < 7; docs/eco.md,
+    the loss signal); a failed frame does not teach the filter, every other one does (ECO-HC). The Kalman
+    box model is paper 000's (7 states) with
     its peak -> Huber threshold map (eq. 38) and the A4 robust update.
     """
 
     robust_method = "A4"
     threshold_map: ThresholdMap = PAPER000_KCF
-    psr_reacquisition = False  # stateful failure test (its PSR mean); re-acquisition's PSR bar is KCF's
+    psr_reacquisition = False  # re-acquisition's PSR bar was measured on KCF's PSRs
+    stateless_failure = True
     own_scale = True  # the size comes from ECO's scale estimate, not from windows of several sizes
     learning_rate = 1.0  # ECO learns a new sample at its own weight (ECOParams.learning_rate) or not at all
 
@@ -51,8 +52,6 @@ class ECOBase:
         self._last: ECODetection | None = None  # the scale search's detection, learnt from by `train`
         self._found: list[ECODetection] = []  # the last detection call's, by window (`memory_score`)
         self.memory: list[np.ndarray] | None = None  # the long-term memory's filter (`start_memory`)
-        self._taught = (0.0, 0.0, 0)  # LMCF gate: sums of the peak and APCE of the frames that taught, count
-        self._passed = (0.0, 0)  # sum of the PSRs of the detections that passed the failure test, count
 
     # ------------------------------------------------------------------ set-up and model
     def initialise(self, img: np.ndarray, box: Box) -> None:
@@ -64,29 +63,12 @@ class ECOBase:
         return kcf_box_model()
 
     def failed(self, det: Detection) -> bool:
-        """Failure (occlusion) test: the PSR below `failure_psr` (paper 000) or below `failure_psr_ratio` x
-        the mean PSR of the detections that passed it; called once per frame on the normal-mode detection
-        (it keeps that mean, as DCF-CA's APCE test keeps its own)."""
-        total, n = self._passed
-        bar = max(self.fp.failure_psr, self.fp.failure_psr_ratio * total / n if n else 0.0)
-        if det.psr < bar:
-            return True
-        self._passed = (total + det.psr, n + 1)
-        return False
+        """Failure (occlusion) test: the PSR below `failure_psr` (paper 000 eq. 10 and its threshold 7)."""
+        return det.psr < self.fp.failure_psr
 
     def confident(self, det: Detection) -> bool:
-        """May the model learn from this (non-failed) frame? Every one, or with the `lmcf` gate those whose
-        peak and APCE reach beta1 and beta2 x their means over the frames that taught it (LMCF, Wang et al.,
-        CVPR 2017, eq. 12). Called once per such frame."""
-        fp = self.fp
-        if fp.update_gate != "lmcf":
-            return True
-        peaks, apces, n = self._taught
-        ok = n == 0 or (det.peak >= fp.lmcf_peak_ratio * peaks / n
-                        and det.apce >= fp.lmcf_apce_ratio * apces / n)
-        if ok:
-            self._taught = (peaks + det.peak, apces + det.apce, n + 1)
-        return ok
+        """Every non-failed frame teaches the filter (ECO-HC; LMCF's gate measured worse, docs/eco.md)."""
+        return True
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
         """Learn the frame's scale-search sample, centred on the posterior `box` (ECO Sec. 3.2-3.3: the

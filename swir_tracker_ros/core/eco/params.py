@@ -150,25 +150,6 @@ class ECOParams:
         0.0,
         100.0,
     )
-    failure_psr_ratio: float = _f(
-        0.35,
-        "(ours) failure also when the PSR falls below this x the mean PSR of the frames that passed the test "
-        "(a relative test as the dissertation's APCE test, eq. 4.96): OTB jogging-1's pole drops ECO's PSR "
-        "from ~30 to 7.1-7.6, over paper 000's 7. 0.35 fails 1.6 % of the frames on the target on either "
-        "fold (short-term ECO, OPE; docs/eco.md); 0: off",
-        0.0,
-        1.0,
-    )
-
-    update_gate: str = _f(
-        "every",
-        "which non-failed frames teach the filter: every (ECO-HC) or lmcf (Wang et al., CVPR 2017, eq. 12: "
-        "the peak and the APCE both above a ratio of their means over the frames that taught it)",
-        choices=("every", "lmcf"),
-    )
-    lmcf_peak_ratio: float = _f(0.7, "gate lmcf: beta1, peak >= beta1 x mean peak (LMCF)", 0.0, 2.0)
-    lmcf_apce_ratio: float = _f(0.45, "gate lmcf: beta2, APCE >= beta2 x mean APCE (LMCF)", 0.0, 2.0)
-
     def validate(self) -> None:
         validate_params(self, "eco.")
 
