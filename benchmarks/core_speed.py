@@ -105,29 +105,36 @@ def warm_up() -> None:
     Tracker.warm_up()
 
 
-def tracker_params(occlusion: bool, estimator: str | None = None):
-    """Default TrackerParams; `estimator` overrides the default filter's scale_estimator (e.g. "dsst")."""
-    from swir_tracker_ros.tracker import TrackerParams
+def tracker_params(occlusion: bool, estimator: str | None = None, name: str | None = None):
+    """TrackerParams of the configuration `name` (None: the default); `estimator` overrides the default
+    filter's scale_estimator (e.g. "dsst")."""
+    from swir_tracker_ros.configs import DEFAULT_CONFIGURATION, configuration
 
-    params = TrackerParams()
+    params = configuration(name or DEFAULT_CONFIGURATION)
     if estimator is not None:
         params.base.scale_estimator = estimator
     if occlusion:
-        # a PSR threshold no response reaches forces re-detection (the default's lattice) every frame
+        # a PSR threshold no response reaches forces re-detection (the configuration's lattice or grid) every
+        # frame; the base filters name their PSR failure threshold differently (KCF, ECO: its PSRs reach
+        # 150+ on these clean synthetic targets)
         params.occlusion.max_frames = 100000
-        params.base.psr_threshold = 100.0
+        for field, bar in (("psr_threshold", 100.0), ("failure_psr", 1000.0)):
+            if hasattr(params.base, field):
+                setattr(params.base, field, bar)
     return params
 
 
 def time_ours(
-    frames: np.ndarray, box: tuple[float, ...], occlusion: bool, estimator: str | None = None
+    frames: np.ndarray, box: tuple[float, ...], occlusion: bool, estimator: str | None = None,
+    name: str | None = None,
 ) -> dict:
-    """Per-frame wall times of our default tracker; `frac` = share of frames in the requested mode."""
+    """Per-frame wall times of our tracker in configuration `name` (None: the default); `frac` = share of
+    frames in the requested mode."""
     from swir_tracker_ros.tracker import Tracker
     from swir_tracker_ros.types import Box, SearchMode
 
     warm_up()
-    trk = Tracker(tracker_params(occlusion, estimator))
+    trk = Tracker(tracker_params(occlusion, estimator, name))
     trk.init(frames[0], Box(*box))
     want = SearchMode.MULTI_WINDOW if occlusion else SearchMode.NORMAL
     hits = 0
@@ -506,6 +513,8 @@ def main() -> None:
             "normal": time_ours(frames, box, occlusion=False),
             "occlusion": time_ours(frames, box, occlusion=True),
             "dsst": time_ours(frames, box, occlusion=False, estimator="dsst"),
+            "eco_cfg": time_ours(frames, box, occlusion=False, name="eco"),
+            "eco_cfg_occ": time_ours(frames, box, occlusion=True, name="eco"),
         }
         res.update(time_opencv(to8bit(frames), box))
         res["eco"] = eco_speed.time_eco(frames, box)  # the ECO base filter, short-term (core/eco)
@@ -525,27 +534,30 @@ def main() -> None:
         "csrt": "OpenCV CSRT",
         "kcf": "OpenCV KCF default (CN+gray)",
         "kcf_gray": "OpenCV KCF gray, 1 channel",
-        "eco": "ours ECO base filter (fDSST)",
+        "eco_cfg": "ours configuration eco, normal",
+        "eco_cfg_occ": "ours configuration eco, occlusion (3x3 grid)",
+        "eco": "ours ECO base filter alone (fDSST)",
         "eco_port": "ECO-HC Python port",
     }
-    print("\ntracker                              size      fps  cpu fps   p50 ms   p95 ms   max ms")
+    print("\ntracker" + " " * 42 + "size      fps  cpu fps   p50 ms   p95 ms   max ms")
     for tag, res in results.items():
         for key, label in names.items():
             r = res.get(key)
             if r:
-                extra = f"  ({r['frac']:.0%} in mode)" if "frac" in r else f"  (ok {r['ok']:.0%})"
+                extra = (f"  ({r['frac']:.0%} in mode)" if "frac" in r
+                         else f"  (ok {r['ok']:.0%})" if "ok" in r else "")
                 print(
-                    f"  {label:34s} {tag:7s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} "
+                    f"  {label:46s} {tag:7s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} "
                     f"{r['p95_ms']:8.2f} "
                     f"{r['max_ms']:8.2f}{extra}"
                 )
     head = results[f"{HEADLINE[0]}x{HEADLINE[1]}"]
-    for ours in ("normal", "dsst", "eco"):
+    for ours in ("normal", "dsst", "eco_cfg", "eco"):
         for peer in ("csrt", "kcf", "kcf_gray", "eco_port"):
             if peer in head:
                 ratio = head[ours]["fps"] / head[peer]["fps"]
                 cpu = head[ours]["cpu_fps"] / head[peer]["cpu_fps"]
-                print(f"  ratio {ours:6s} / {names[peer]:28s} at 40x100: {ratio:.2f} (cpu {cpu:.2f})")
+                print(f"  ratio {ours:7s} / {names[peer]:28s} at 40x100: {ratio:.2f} (cpu {cpu:.2f})")
 
     print("\nper-stage profile of the default pipeline, CPU ms/frame (stages exclusive; phases inclusive)")
     keys = sorted(

@@ -148,8 +148,9 @@ class ECOParams:
         "test: a 10 px drone is tracked at peaks of 0.06-0.15 (ECO, OPE), a pedestrian at 0.4-0.5; the PSR "
         "on target stays above 15 on 95 % of the frames of both folds (docs/eco.md); 0: off",
         0.0,
-        100.0,
+        1000.0,
     )
+
     def validate(self) -> None:
         validate_params(self, "eco.")
 
