@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import cv2
@@ -68,6 +69,34 @@ def test_failure_by_the_psr_and_redetection_in_the_grid(scene) -> None:
     scales = ScaleSearch(ScaleSearchParams(n=1)).search(bank, frames[2], pred, verdict)
     found = Redetection(RedetectionParams(lattice_step=0.0)).search(bank, frames[2], pred, scales, 1)
     assert len(found.windows) == 9 and abs(found.det.cx - gts[2].cx) < 4.0 and not bank.failed(found.det)
+
+
+def test_failure_against_the_recent_mean_psr_of_the_taught_frames(scene) -> None:
+    """A PSR over paper 000's 7 still fails when it is below failure_psr_ratio x the mean PSR of the last
+    failure_psr_window taught frames; the mean follows the taught frames only, and only the recent ones."""
+    frames, gts = scene
+    fp = ECOParams(failure_psr_window=4)
+    bank = make_filter(fp, gts[0].w, gts[0].h)
+    bank.initialise(frames[0], gts[0])
+
+    def teach(img: np.ndarray, k: int) -> float:
+        dets, best, _ = bank.detect_scales(img, [window(bank, gts[k])], [1.0], 0.0, climb=False)
+        bank.train(img, gts[k], 1.0)
+        return dets[best].psr
+
+    psrs = [teach(frames[k], k) for k in range(1, 5)]
+    bar = fp.failure_psr_ratio * float(np.mean(psrs))
+    assert bar > 1.2 * fp.failure_psr  # PSRs far over 7 on the jogger: the relative test is the one that acts
+    det = bank.detect(frames[5], [window(bank, gts[5])])[0]
+    weak, fair = (dataclasses.replace(det, psr=v) for v in (0.9 * bar, 1.1 * bar))
+    assert bank.failed(weak) and not bank.failed(fair)
+    assert bank.failed(weak)  # asking again changes nothing: only `train` moves the mean
+    rng = np.random.default_rng(0)  # four taught frames of a noisy view (PSRs ~9) replace the window's PSRs
+    noisy = np.clip(frames[6] + rng.normal(0.0, 0.3, frames[6].shape).astype(np.float32), 0.0, 1.0)
+    assert max(teach(noisy, 6) for _ in range(4)) < weak.psr
+    assert not bank.failed(weak)
+    off = make_filter(dataclasses.replace(fp, failure_psr_ratio=0.0), gts[0].w, gts[0].h)
+    assert not off.failed(weak)
 
 
 def test_the_memory_knows_the_target_and_not_the_background(scene) -> None:

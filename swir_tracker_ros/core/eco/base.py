@@ -12,6 +12,7 @@ of the current size at the windows' centres, one feature batch.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import dataclasses
 import math
@@ -33,7 +34,8 @@ class ECOBase:
     """ECO behind the base-filter surface the tracker's policies use (module docstring).
 
     Failure (`failed`) tests the detection's PSR against `failure_psr` (paper 000's PSR < 7; docs/eco.md,
-    the loss signal); a failed frame does not teach the filter, every other one does (ECO-HC). The Kalman
+    the loss signal) and against a fraction of its recent mean; a failed frame does not teach the filter,
+    every other one does (ECO-HC). The Kalman
     box model is paper 000's (7 states) with
     its peak -> Huber threshold map (eq. 38) and the A4 robust update.
     """
@@ -52,19 +54,27 @@ class ECOBase:
         self._last: ECODetection | None = None  # the scale search's detection, learnt from by `train`
         self._found: list[ECODetection] = []  # the last detection call's, by window (`memory_score`)
         self.memory: list[np.ndarray] | None = None  # the long-term memory's filter (`start_memory`)
+        # PSRs of the last taught frames (the relative failure test)
+        self._recent: collections.deque[float] = collections.deque(maxlen=fp.failure_psr_window)
 
     # ------------------------------------------------------------------ set-up and model
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """Learn the projection and the filter from `box` on the first frame (ECO eq. 4-7)."""
         self.eco.init(img, box)
+        self._recent.clear()
         self._last = None
 
     def box_model(self, w: float, h: float) -> BoxModel:
         return kcf_box_model()
 
     def failed(self, det: Detection) -> bool:
-        """Failure (occlusion) test: the PSR below `failure_psr` (paper 000 eq. 10 and its threshold 7)."""
-        return det.psr < self.fp.failure_psr
+        """Failure (occlusion) test: the PSR below `failure_psr` (paper 000 eq. 10 and its threshold 7) or
+        below `failure_psr_ratio` x the mean PSR of the last `failure_psr_window` frames that taught the
+        filter (kept by `train`; no state changes here, so other windows can be tested too)."""
+        bar = self.fp.failure_psr
+        if self.fp.failure_psr_ratio > 0.0 and self._recent:
+            bar = max(bar, self.fp.failure_psr_ratio * sum(self._recent) / len(self._recent))
+        return det.psr < bar
 
     def confident(self, det: Detection) -> bool:
         """Every non-failed frame teaches the filter (ECO-HC; LMCF's gate measured worse, docs/eco.md)."""
@@ -75,6 +85,7 @@ class ECOBase:
         sample space gets it at its own weight; the filter is optimised on its schedule)."""
         if self._last is None:
             return
+        self._recent.append(self._last.psr)
         det = dataclasses.replace(self._last, w=box.w, h=box.h)
         self.eco.update(img, det, learn=True, center=(box.cx, box.cy))
 

@@ -150,6 +150,19 @@ class ECOParams:
         0.0,
         1000.0,
     )
+    failure_psr_ratio: float = _f(
+        0.35,
+        "(ours) failure also when the PSR falls below this x the mean PSR of the last failure_psr_window "
+        "frames that taught the filter (a relative test, as the dissertation's APCE test, eq. 4.96): an "
+        "occluder or a pole keeps ECO's PSR just over 7 (OTB jogging-1, the synthetic occlusions); 0: off. "
+        "Against the mean of every frame since the start it failed targets whose PSR declines slowly (OTB "
+        "freeman1 SRE 0.434 -> 0.200, docs/eco.md)",
+        0.0,
+        1.0,
+    )
+    failure_psr_window: int = _f(
+        30, "(ours) the last taught frames whose PSRs make failure_psr_ratio's mean (about a second)", 1,
+        100000)
 
     def validate(self) -> None:
         validate_params(self, "eco.")
