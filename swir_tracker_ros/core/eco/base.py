@@ -35,9 +35,8 @@ class ECOBase:
 
     Failure (`failed`) tests the detection's PSR against `failure_psr` (paper 000's PSR < 7; docs/eco.md,
     the loss signal) and against a fraction of its recent mean; a failed frame does not teach the filter,
-    every other one does (ECO-HC). The Kalman
-    box model is paper 000's (7 states) with
-    its peak -> Huber threshold map (eq. 38) and the A4 robust update.
+    every other one does (ECO-HC). The Kalman box model is paper 000's (7 states) with its peak -> Huber
+    threshold map (eq. 38) and the A4 robust update.
     """
 
     robust_method = "A4"
@@ -77,7 +76,7 @@ class ECOBase:
         return det.psr < bar
 
     def confident(self, det: Detection) -> bool:
-        """Every non-failed frame teaches the filter (ECO-HC; LMCF's gate measured worse, docs/eco.md)."""
+        """Every non-failed frame teaches the filter (ECO-HC; the LMCF gate was measured worse)."""
         return True
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
