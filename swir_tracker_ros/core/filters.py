@@ -148,6 +148,9 @@ class BACFFilter(KCFFilter):
 
     name = "bacf"
     psr_reacquisition = False  # its flatter responses keep PSRs near 7 on the target
+    # its failure test has no state either, but the look-alike guard and the long-loss sweep were never
+    # measured on BACF's responses: they stay out of its tracker, as before the flag existed
+    stateless_failure = False
 
     def __init__(self, fp: BACFParams, w: float, h: float) -> None:
         self._size = (w, h)
