@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """`eco` (ours): the ECO base filter (core/eco/, ECO-HC's configuration where measured no worse) inside the
-long-term layers: its peak's failure test, the papers' 3x3 re-detection grid around the robust Kalman
-filter's prediction, learning only on frames that pass the test."""
+long-term layers: its PSR failure test (paper 000's 7 and a fraction of the recent mean), the papers' 3x3
+re-detection grid around the robust Kalman filter's prediction, learning only on frames that pass the test.
+Best on the shared sequences, not on the synthetic occlusions: not the default (docs/eco.md)."""
 
 from __future__ import annotations
 
