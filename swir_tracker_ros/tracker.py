@@ -63,11 +63,11 @@ class _Track:
         remembers = p.memory is not None and p.memory.ratio > 0
         self.memory = AppearanceMemory(p.memory, bank) if remembers else None
         self.motion = MotionFilter(p.motion, bank, box) if p.motion is not None else None
-        stateless = bank.stateless_failure  # a second call of the failure test changes nothing
+        wraps = bank.window_policies  # the guard and the sweep test other windows with the failure test
         self.lookalike = (LookalikeGuard(p.lookalike, self.trail)
-                          if p.lookalike is not None and p.lookalike.frames > 0 and stateless else None)
+                          if p.lookalike is not None and p.lookalike.frames > 0 and wraps else None)
         self.sweep = (LongLossSweep(p.sweep, p.redetection)
-                      if p.sweep is not None and p.sweep.after > 0 and self.redetection.lattice and stateless
+                      if p.sweep is not None and p.sweep.after > 0 and self.redetection.lattice and wraps
                       else None)
         self.rejected = RejectedFrames(p.rejected) if p.rejected is not None else None
 

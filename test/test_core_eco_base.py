@@ -62,7 +62,7 @@ def test_failure_by_the_psr_and_redetection_in_the_grid(scene) -> None:
     on = [bank.detect(frames[k], [window(bank, gts[k])])[0] for k in (1, 2, 3)]
     assert not any(bank.failed(d) for d in on) and min(d.psr for d in on) > 15.0
     far = bank.detect(frames[2], [window(bank, gts[2], dx=-120.0)])[0]
-    assert bank.stateless_failure and bank.failed(far) and far.psr < bank.fp.failure_psr
+    assert bank.window_policies and bank.failed(far) and far.psr < bank.fp.failure_psr
     assert [bank.failed(d) for d in (far, *on)] == [True, False, False, False]
     pred = gts[2].shifted(gts[2].w * (1.0 + bank.padding) * 2.0 / 3.0, 0.0)
     verdict = OcclusionVerdict(OcclusionParams(), bank.failed, bank.psr_reacquisition)

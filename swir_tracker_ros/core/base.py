@@ -47,9 +47,10 @@ class BaseFilter(MultiWindow, ABC):
     threshold_map: ClassVar[ThresholdMap]  # peak -> Huber threshold (paper 000 eq. 38 / dissertation eq. 6.9)
     # (ours) re-acquisition also needs PSR >= `redetect_psr`: only filters whose PSRs that bar was measured on
     psr_reacquisition: ClassVar[bool] = False
-    # a failure test without state (a second call on the same detection changes nothing): the policies that
-    # test other windows than the frame's own (look-alike guard, long-loss sweep) need one
-    stateless_failure: ClassVar[bool] = False
+    # may the look-alike guard and the long-loss sweep wrap this filter? They test windows other than the
+    # frame's own with `failed`, so its test must have no state (a second call changes nothing), and they
+    # take only filters they were measured with
+    window_policies: ClassVar[bool] = False
 
     def __init__(self, fp: Any, w: float, h: float) -> None:
         self.fp = fp

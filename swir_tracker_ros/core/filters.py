@@ -35,7 +35,7 @@ class KCFFilter(BaseFilter):
     robust_method = "A4"
     threshold_map = PAPER000_KCF
     psr_reacquisition = True
-    stateless_failure = True
+    window_policies = True
 
     def _build(self) -> KCF:
         return KCF(self.fp, self.shape, self.target_cells)
@@ -149,8 +149,8 @@ class BACFFilter(KCFFilter):
     name = "bacf"
     psr_reacquisition = False  # its flatter responses keep PSRs near 7 on the target
     # its failure test has no state either, but the look-alike guard and the long-loss sweep were never
-    # measured on BACF's responses: they stay out of its tracker, as before the flag existed
-    stateless_failure = False
+    # measured on BACF's responses
+    window_policies = False
 
     def __init__(self, fp: BACFParams, w: float, h: float) -> None:
         self._size = (w, h)

@@ -74,7 +74,7 @@ class LookalikeGuard:
     target is at the reference the moment the box leaves it; when nothing is there then, the target moved
     off the reference itself, and the reference, extrapolated on, would only pass over background (a
     stage light took a skater's box 10 frames into her start: OTB skating1 from the 0.8 start, measured).
-    Base filters with a stateless failure test only (`stateless_failure`: KCF, ECO): DCF-CA's keeps a running
+    Base filters with a stateless failure test only (`window_policies`: KCF, ECO): DCF-CA's keeps a running
     APCE mean that a second call would move. The extra detection (the windows the scale search correlated,
     again, so that the winner's index still names its features) costs one more frame's search on at most
     CHECKS frames per departure.

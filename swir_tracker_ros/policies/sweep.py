@@ -65,7 +65,7 @@ class LongLossSweep:
     (with the filter: and beats the lattice's pick `best`). Windows centred on it at the sizes of the
     re-detection's scale search (redetect_scales: a size that drifted while the target was hidden) are
     correlated; the best must pass the bars again and the PSR bar (with the filter: and the memory must
-    find the target there). Base filters with a stateless failure test only (`stateless_failure`: KCF,
+    find the target there). Base filters with a stateless failure test only (`window_policies`: KCF,
     ECO), as the look-alike guard.
     """
 

@@ -42,7 +42,7 @@ class ECOBase:
     robust_method = "A4"
     threshold_map: ThresholdMap = PAPER000_KCF
     psr_reacquisition = False  # re-acquisition's PSR bar was measured on KCF's PSRs
-    stateless_failure = True
+    window_policies = True  # its failure test has no state: the PSR mean moves in `train`
     own_scale = True  # the size comes from ECO's scale estimate, not from windows of several sizes
     learning_rate = 1.0  # ECO learns a new sample at its own weight (ECOParams.learning_rate) or not at all
 
