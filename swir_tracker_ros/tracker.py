@@ -13,7 +13,7 @@ from swir_tracker_ros.core import fhog
 from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.conditioning import FrameConditioner
 from swir_tracker_ros.core.features import SmoothedFrame
-from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.errors import KalmanError, TrackerError
 from swir_tracker_ros.policies.coast import CoastModel
@@ -48,22 +48,22 @@ def _as_box(box: object) -> Box:
 class _Track:
     """The per-track state: the base filter and the policies of one target (built by `Tracker.init`)."""
 
-    def __init__(self, p: TrackerParams, bank: BaseFilter, box: Box, frame_shape: tuple[int, ...]) -> None:
-        self.bank = bank
+    def __init__(self, p: TrackerParams, base: BaseFilter, box: Box, frame_shape: tuple[int, ...]) -> None:
+        self.base = base
         self.frame_shape = frame_shape
         self.init_size = (box.w, box.h)
         self.box = box  # the current estimate, conditioned-image pixels
         self.trail = Trail(p.trail_frames)
         self.trail.remember_size(box)
-        self.verdict = OcclusionVerdict(p.occlusion, bank.failed, bank.psr_reacquisition)
+        self.verdict = OcclusionVerdict(p.occlusion, base.failed, base.psr_reacquisition)
         self.gate = UpdateGate(p.update)
         self.scales = ScaleSearch(p.scale)
         self.redetection = Redetection(p.redetection)
         self.coast = CoastModel(p.coast)
         remembers = p.memory is not None and p.memory.ratio > 0
-        self.memory = AppearanceMemory(p.memory, bank) if remembers else None
-        self.motion = MotionFilter(p.motion, bank, box) if p.motion is not None else None
-        wraps = bank.window_policies  # the guard and the sweep test other windows with the failure test
+        self.memory = AppearanceMemory(p.memory, base) if remembers else None
+        self.motion = MotionFilter(p.motion, base, box) if p.motion is not None else None
+        wraps = base.window_policies  # the guard and the sweep test other windows with the failure test
         self.lookalike = (LookalikeGuard(p.lookalike, self.trail)
                           if p.lookalike is not None and p.lookalike.frames > 0 and wraps else None)
         self.sweep = (LongLossSweep(p.sweep, p.redetection)
@@ -137,9 +137,9 @@ class Tracker:
         b = Box(box.x * ds, box.y * ds, box.w * ds, box.h * ds)
         self._sigma = p.presmooth * math.sqrt(b.w * b.h)
         img = self._smoothed(img)
-        bank = make_filter(p.base, b.w, b.h)  # the configuration's base filter, selected once
-        bank.initialise(img, b)
-        self._track = _Track(p, bank, b, frame.shape)
+        base = make_filter(p.base, b.w, b.h)  # the configuration's base filter, selected once
+        base.initialise(img, b)
+        self._track = _Track(p, base, b, frame.shape)
         self._state = TrackState.TRACKING
 
     def update(
@@ -189,15 +189,15 @@ class Tracker:
     # ------------------------------------------------------------------ per-frame steps
     def _step_cf(self, t: _Track, img: np.ndarray) -> TrackResult:
         """Bare correlation filter: one window at the last position, fixed size, update every frame."""
-        bank, box = t.bank, t.box
-        win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
-        det = bank.detect(img, [win])[0]
+        base, box = t.base, t.box
+        win = search_window(box.cx, box.cy, box.w, box.h, base.padding)
+        det = base.detect(img, [win])[0]
         t.box = Box.from_center(det.cx, det.cy, box.w, box.h)
-        bank.train(img, t.box, bank.learning_rate)
+        base.train(img, t.box, base.learning_rate)
         return self._result(t.box, TrackState.TRACKING, det=det, measured=True, updated=True, windows=(win,))
 
     def _step(self, t: _Track, img: np.ndarray, dx: float, dy: float, frames: float) -> TrackResult:
-        bank, motion, verdict = t.bank, t.motion, t.verdict
+        base, motion, verdict = t.base, t.motion, t.verdict
         assert motion is not None
         pred = motion.predict(frames, dx, dy)
         t.trail.advance(frames, dx, dy)
@@ -211,12 +211,12 @@ class Tracker:
             motion.hold_in(iw, ih)
             pred = motion.box()
         pred = t.clamp_size(pred)
-        scales = t.scales.search(bank, img, pred, verdict)
+        scales = t.scales.search(base, img, pred, verdict)
         det, best, window = scales.dets[scales.best], scales.best, scales.wins[scales.mid]
         failed = verdict.failed(det)
         takeback = None
         if not failed and verdict.occluded == 0 and t.lookalike is not None:
-            takeback = t.lookalike.check(bank, img, det, pred, scales.wins, scales.factors, verdict)
+            takeback = t.lookalike.check(base, img, det, pred, scales.wins, scales.factors, verdict)
             if takeback is not None:
                 best = takeback.best
                 det = takeback.dets[best]
@@ -226,7 +226,7 @@ class Tracker:
         if failed:
             mode = SearchMode.MULTI_WINDOW
             t.coast.redetecting(motion, verdict.occluded)
-            found = t.redetection.search(bank, img, pred, scales, verdict.occluded)
+            found = t.redetection.search(base, img, pred, scales, verdict.occluded)
             det, shown = found.det, found.windows
         if not failed and verdict.weak(det.peak, t.coast.p.size_hold_peak_ratio):
             motion.hold_size()  # (ours) a weak frame's size is measured, not extrapolated
@@ -247,7 +247,7 @@ class Tracker:
         z = motion.measurement(det.cx, det.cy, *size)
         jump = None
         if (failed or rejected) and t.sweep is not None:
-            jump = t.sweep.search(bank, img, pred, window, det, verdict, t.memory, t.scales)
+            jump = t.sweep.search(base, img, pred, window, det, verdict, t.memory, t.scales)
         if jump is not None:  # (ours) the sweep found the target away from the prediction: start there
             det, mode, shown = jump.det, SearchMode.MULTI_WINDOW, (*shown, jump.window)
             k = motion.threshold(det.peak)
@@ -268,9 +268,9 @@ class Tracker:
         t.box = t.clamp_size(motion.posterior())
         if learn:
             t.memory.learn(img, t.box)
-        rate = t.gate.rate(bank, det, failed or rejected)
+        rate = t.gate.rate(base, det, failed or rejected)
         if rate is not None:
-            bank.train(img, t.box, rate)
+            base.train(img, t.box, rate)
         if failed or rejected:
             if verdict.occluded == 0:
                 t.coast.start(motion, t.trail)

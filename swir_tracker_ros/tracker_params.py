@@ -10,10 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from swir_tracker_ros.core.bacf import BACFParams
+from swir_tracker_ros.core.base import FilterParams
 from swir_tracker_ros.core.conditioning import ConditioningConfig
-from swir_tracker_ros.core.dcf_ca import DCFCAParams
-from swir_tracker_ros.core.eco.params import ECOParams
 from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.paramfield import nested, param, validate_params
 from swir_tracker_ros.policies.coast import CoastParams
@@ -26,9 +24,6 @@ from swir_tracker_ros.policies.rejected import RejectedParams
 from swir_tracker_ros.policies.scale_search import ScaleSearchParams
 from swir_tracker_ros.policies.sweep import SweepParams
 from swir_tracker_ros.policies.update_gate import UpdateGateParams
-
-FilterParams = KCFParams | DCFCAParams | BACFParams | ECOParams
-"""The Params of a base filter; its type selects the filter (core/filters.py `make_filter`)."""
 
 
 @dataclass

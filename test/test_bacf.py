@@ -15,8 +15,9 @@ from swir_tracker_ros.core.bacf import BACF, BACFParams
 from swir_tracker_ros.core.confidence import analyse
 from swir_tracker_ros.core.features import extract_features, feature_shape, sample_patch
 from swir_tracker_ros.core.fft import irfft2, rfft2
-from swir_tracker_ros.core.filters import FILTERS, BACFFilter, make_filter
+from swir_tracker_ros.core.filters import BACFFilter
 from swir_tracker_ros.core.kcf import KCFParams
+from swir_tracker_ros.core.registry import BASE_FILTERS, make_filter
 from swir_tracker_ros.core.windows import search_window, template_size
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.tracker import Tracker
@@ -110,7 +111,7 @@ def test_bacf_recovers_shifts_of_a_real_patch_beyond_the_kcf_window() -> None:
 
 
 def test_params_validate_and_nest_in_tracker_params() -> None:
-    assert FILTERS[BACFParams] is BACFFilter
+    assert BASE_FILTERS["bacf"] is BACFFilter and BACFFilter.Params is BACFParams
     configuration("measured", "bacf").validate()
     for name, value in [("padding", 0.1), ("admm_iterations", 0), ("lambda_", float("nan"))]:
         p = configuration("measured", "bacf")
@@ -128,15 +129,15 @@ def test_pipeline_bacf_is_selected_calibrated_and_tracks() -> None:
     # 6.1 instead of 7.1, under the failure threshold 7)
     p = configuration("measured", "bacf")
     p.scale.penalty, p.coast.trail_velocity, p.trail_frames = 1.0, False, 0
-    bank = make_filter(p.base, box.w, box.h)
-    assert isinstance(bank, BACFFilter)
-    cells = (bank.tw // bank.cell) * (bank.th // bank.cell)
+    base = make_filter(p.base, box.w, box.h)
+    assert isinstance(base, BACFFilter)
+    cells = (base.tw // base.cell) * (base.th // base.cell)
     assert cells <= p.base.max_window_cells
     big = make_filter(p.base, 4 * box.w, 4 * box.h)  # a large target: the template is capped
     assert (big.tw // big.cell) * (big.th // big.cell) <= p.base.max_window_cells
-    bank.initialise(img, box)
-    win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
-    det = bank.detect(img, [win])[0]
+    base.initialise(img, box)
+    win = search_window(box.cx, box.cy, box.w, box.h, base.padding)
+    det = base.detect(img, [win])[0]
     assert det.peak == pytest.approx(p.base.reference_peak, rel=1e-3)  # first-frame self response
     frames = [(cv2.imread(str(SEQ / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE)) for i in range(1, 31)]
     gt = np.loadtxt(SEQ / "gt.txt", delimiter=",")
@@ -154,18 +155,18 @@ def test_filter_maps_peaks_to_image_pixels_for_both_window_shapes(shape: str) ->
     """The tracker hands in proportional windows; a square filter window must still map its peak (and
     the re-detection lattice's) back to the right image pixels."""
     img, box = first_frame()
-    bank = make_filter(BACFParams(window_shape=shape), box.w, box.h)
-    assert (bank.tw == bank.th) == (shape == "square")
-    bank.initialise(img, box)
-    win = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
+    base = make_filter(BACFParams(window_shape=shape), box.w, box.h)
+    assert (base.tw == base.th) == (shape == "square")
+    base.initialise(img, box)
+    win = search_window(box.cx, box.cy, box.w, box.h, base.padding)
     dx, dy = 7.0, -5.0
     moved = shifted(img, dx, dy)
-    det = bank.detect(moved, [win])[0]
+    det = base.detect(moved, [win])[0]
     assert abs(det.cx - box.cx - dx) < 1.5 and abs(det.cy - box.cy - dy) < 1.5, (det.cx, det.cy)
     side = np.sqrt(win.w * win.h)
     assert det.window.w == pytest.approx(side if shape == "square" else win.w)
     off = win.shifted(-0.6 * win.w, 0.3 * win.h)  # the lattice around a prediction off the target
-    dets, _ = bank.detect_lattice(moved, off, 0.35, 2, channels=8)
+    dets, _ = base.detect_lattice(moved, off, 0.35, 2, channels=8)
     best = max(dets, key=lambda d: d.peak)
     assert abs(best.cx - box.cx - dx) < 2.0 and abs(best.cy - box.cy - dy) < 2.0
 
@@ -179,11 +180,11 @@ def test_relative_psr_failure_test() -> None:
     tracked = Detection(25.0, 25.0, 0.8, 14.0, 60.0, 1.0, win)
     wall = Detection(25.0, 25.0, 0.35, 8.0, 25.0, 1.0, win)
     for ratio, expected in [(0.6, True), (0.0, False)]:
-        bank = make_filter(BACFParams(psr_ratio=ratio), 10.0, 10.0)
-        assert not bank.failed(wall)  # no updated frame yet: the absolute threshold (7) alone
+        base = make_filter(BACFParams(psr_ratio=ratio), 10.0, 10.0)
+        assert not base.failed(wall)  # no updated frame yet: the absolute threshold (7) alone
         for _ in range(3):
-            assert not bank.failed(tracked) and bank.confident(tracked)
-        assert bank.failed(wall) is expected
+            assert not base.failed(tracked) and base.confident(tracked)
+        assert base.failed(wall) is expected
 
 
 def test_psr_is_taken_around_the_peak_over_psr_window_target_sizes() -> None:
@@ -192,17 +193,17 @@ def test_psr_is_taken_around_the_peak_over_psr_window_target_sizes() -> None:
     from swir_tracker_ros.core.confidence import psr
 
     p = BACFParams()
-    bank = make_filter(p, 40.0, 40.0)
-    rows, cols = bank.shape[1:]
+    base = make_filter(p, 40.0, 40.0)
+    rows, cols = base.shape[1:]
     rng = np.random.default_rng(3)
     far = rng.normal(0.0, 0.02, (rows, cols)).astype(np.float32)
     far[0, 0] = 1.0
     near = far.copy()
-    r, c, e = rows // 2, cols // 2, 2 * bank.exclusion
+    r, c, e = rows // 2, cols // 2, 2 * base.exclusion
     far[r - 1 : r + 2, c - 1 : c + 2] = 0.9  # a look-alike half a window away: outside 2.5 target sizes
     near[e - 1 : e + 2, 0:2] = 0.9  # one just outside the exclusion zone
     k = p.psr_window / (1.0 + p.padding)
-    assert bank._local_psr(far, k) > 2.0 * psr(far, 0, 0, bank.exclusion)
-    assert bank._local_psr(near, k) < 0.5 * bank._local_psr(far, k)
-    det = bank._detections(far[None], [Box(0.0, 0.0, 200.0, 200.0)], [1.0])[0]
-    assert det.psr == pytest.approx(bank._local_psr(far, k))
+    assert base._local_psr(far, k) > 2.0 * psr(far, 0, 0, base.exclusion)
+    assert base._local_psr(near, k) < 0.5 * base._local_psr(far, k)
+    det = base._detections(far[None], [Box(0.0, 0.0, 200.0, 200.0)], [1.0])[0]
+    assert det.psr == pytest.approx(base._local_psr(far, k))

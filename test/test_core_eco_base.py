@@ -13,7 +13,7 @@ import pytest
 from swir_tracker_ros.configs import configuration
 from swir_tracker_ros.core.eco.base import ECOBase
 from swir_tracker_ros.core.eco.params import ECOParams
-from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.policies.occlusion import OcclusionParams, OcclusionVerdict
 from swir_tracker_ros.policies.redetection import Redetection, RedetectionParams
@@ -34,22 +34,22 @@ def scene(sequences_dir: Path) -> tuple[list[np.ndarray], list[Box]]:
     return frames, gts
 
 
-def window(bank: ECOBase, box: Box, dx: float = 0.0) -> Box:
-    return search_window(box.cx + dx, box.cy, box.w, box.h, bank.padding)
+def window(base: ECOBase, box: Box, dx: float = 0.0) -> Box:
+    return search_window(box.cx + dx, box.cy, box.w, box.h, base.padding)
 
 
 def test_the_scale_search_is_one_eco_detection_for_every_window(scene) -> None:
     frames, gts = scene
-    bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
-    assert isinstance(bank, ECOBase) and bank.own_scale
-    bank.initialise(frames[0], gts[0])
-    verdict = OcclusionVerdict(OcclusionParams(), bank.failed, bank.psr_reacquisition)
-    res = ScaleSearch(ScaleSearchParams()).search(bank, frames[2], gts[0], verdict)
+    base = make_filter(ECOParams(), gts[0].w, gts[0].h)
+    assert isinstance(base, ECOBase) and base.own_scale
+    base.initialise(frames[0], gts[0])
+    verdict = OcclusionVerdict(OcclusionParams(), base.failed, base.psr_reacquisition)
+    res = ScaleSearch(ScaleSearchParams()).search(base, frames[2], gts[0], verdict)
     assert len(res.factors) == 5 and all(d is res.dets[0] for d in res.dets) and res.best == res.mid
     det = res.dets[0]
     assert abs(det.cx - gts[2].cx) < 3.0 and abs(det.cy - gts[2].cy) < 3.0
-    assert not bank.failed(det) and bank.confident(det) and 0.85 < det.scale < 1.15
-    assert ScaleSearch(ScaleSearchParams()).factors(bank, 5) == res.factors  # no wide sizes: ECO's own scale
+    assert not base.failed(det) and base.confident(det) and 0.85 < det.scale < 1.15
+    assert ScaleSearch(ScaleSearchParams()).factors(base, 5) == res.factors  # no wide sizes: ECO's own scale
 
 
 def test_failure_by_the_psr_and_redetection_in_the_grid(scene) -> None:
@@ -57,18 +57,18 @@ def test_failure_by_the_psr_and_redetection_in_the_grid(scene) -> None:
     the test has no state (a second call answers the same); the 3x3 grid around a prediction a window's step
     beside him finds him again."""
     frames, gts = scene
-    bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
-    bank.initialise(frames[0], gts[0])
-    on = [bank.detect(frames[k], [window(bank, gts[k])])[0] for k in (1, 2, 3)]
-    assert not any(bank.failed(d) for d in on) and min(d.psr for d in on) > 15.0
-    far = bank.detect(frames[2], [window(bank, gts[2], dx=-120.0)])[0]
-    assert bank.window_policies and bank.failed(far) and far.psr < bank.fp.failure_psr
-    assert [bank.failed(d) for d in (far, *on)] == [True, False, False, False]
-    pred = gts[2].shifted(gts[2].w * (1.0 + bank.padding) * 2.0 / 3.0, 0.0)
-    verdict = OcclusionVerdict(OcclusionParams(), bank.failed, bank.psr_reacquisition)
-    scales = ScaleSearch(ScaleSearchParams(n=1)).search(bank, frames[2], pred, verdict)
-    found = Redetection(RedetectionParams(lattice_step=0.0)).search(bank, frames[2], pred, scales, 1)
-    assert len(found.windows) == 9 and abs(found.det.cx - gts[2].cx) < 4.0 and not bank.failed(found.det)
+    base = make_filter(ECOParams(), gts[0].w, gts[0].h)
+    base.initialise(frames[0], gts[0])
+    on = [base.detect(frames[k], [window(base, gts[k])])[0] for k in (1, 2, 3)]
+    assert not any(base.failed(d) for d in on) and min(d.psr for d in on) > 15.0
+    far = base.detect(frames[2], [window(base, gts[2], dx=-120.0)])[0]
+    assert base.window_policies and base.failed(far) and far.psr < base.fp.failure_psr
+    assert [base.failed(d) for d in (far, *on)] == [True, False, False, False]
+    pred = gts[2].shifted(gts[2].w * (1.0 + base.padding) * 2.0 / 3.0, 0.0)
+    verdict = OcclusionVerdict(OcclusionParams(), base.failed, base.psr_reacquisition)
+    scales = ScaleSearch(ScaleSearchParams(n=1)).search(base, frames[2], pred, verdict)
+    found = Redetection(RedetectionParams(lattice_step=0.0)).search(base, frames[2], pred, scales, 1)
+    assert len(found.windows) == 9 and abs(found.det.cx - gts[2].cx) < 4.0 and not base.failed(found.det)
 
 
 def test_failure_against_the_recent_mean_psr_of_the_taught_frames(scene) -> None:
@@ -76,47 +76,47 @@ def test_failure_against_the_recent_mean_psr_of_the_taught_frames(scene) -> None
     failure_psr_window taught frames; the mean follows the taught frames only, and only the recent ones."""
     frames, gts = scene
     fp = ECOParams(failure_psr_window=4)
-    bank = make_filter(fp, gts[0].w, gts[0].h)
-    bank.initialise(frames[0], gts[0])
+    base = make_filter(fp, gts[0].w, gts[0].h)
+    base.initialise(frames[0], gts[0])
 
     def teach(img: np.ndarray, k: int) -> float:
-        dets, best, _ = bank.detect_scales(img, [window(bank, gts[k])], [1.0], 0.0, climb=False)
-        bank.train(img, gts[k], 1.0)
+        dets, best, _ = base.detect_scales(img, [window(base, gts[k])], [1.0], 0.0, climb=False)
+        base.train(img, gts[k], 1.0)
         return dets[best].psr
 
     psrs = [teach(frames[k], k) for k in range(1, 5)]
     bar = fp.failure_psr_ratio * float(np.mean(psrs))
     assert bar > 1.2 * fp.failure_psr  # PSRs far over 7 on the jogger: the relative test is the one that acts
-    det = bank.detect(frames[5], [window(bank, gts[5])])[0]
+    det = base.detect(frames[5], [window(base, gts[5])])[0]
     weak, fair = (dataclasses.replace(det, psr=v) for v in (0.9 * bar, 1.1 * bar))
-    assert bank.failed(weak) and not bank.failed(fair)
-    assert bank.failed(weak)  # asking again changes nothing: only `train` moves the mean
+    assert base.failed(weak) and not base.failed(fair)
+    assert base.failed(weak)  # asking again changes nothing: only `train` moves the mean
     rng = np.random.default_rng(0)  # four taught frames of a noisy view (PSRs ~9) replace the window's PSRs
     noisy = np.clip(frames[6] + rng.normal(0.0, 0.3, frames[6].shape).astype(np.float32), 0.0, 1.0)
     assert max(teach(noisy, 6) for _ in range(4)) < weak.psr
-    assert not bank.failed(weak)
+    assert not base.failed(weak)
     off = make_filter(dataclasses.replace(fp, failure_psr_ratio=0.0), gts[0].w, gts[0].h)
     assert not off.failed(weak)
 
 
 def test_the_memory_knows_the_target_and_not_the_background(scene) -> None:
     frames, gts = scene
-    bank = make_filter(ECOParams(), gts[0].w, gts[0].h)
-    bank.initialise(frames[0], gts[0])
-    bank.start_memory()
-    bank.detect(frames[2], [window(bank, gts[2]), window(bank, gts[2], dx=-120.0)])
-    on, off = bank.memory_score(0), bank.memory_score(1)
+    base = make_filter(ECOParams(), gts[0].w, gts[0].h)
+    base.initialise(frames[0], gts[0])
+    base.start_memory()
+    base.detect(frames[2], [window(base, gts[2]), window(base, gts[2], dx=-120.0)])
+    on, off = base.memory_score(0), base.memory_score(1)
     assert on > 0.3 and off < 0.5 * on
-    memory, filt = bank.memory, bank.eco.hf
-    with bank.memory_as_filter():
-        assert bank.eco.hf is memory and bank.memory is filt
-    assert bank.eco.hf is filt and bank.memory is memory
+    memory, filt = base.memory, base.eco.hf
+    with base.memory_as_filter():
+        assert base.eco.hf is memory and base.memory is filt
+    assert base.eco.hf is filt and base.memory is memory
     for k in range(3, 12):  # the filter learns a few frames (optimised on its schedule), the memory not
-        bank.detect_scales(frames[k], [window(bank, gts[k])], [1.0], 1.0, climb=False)
-        bank.train(frames[k], gts[k], 1.0)
-    before = [m.copy() for m in bank.memory]
-    bank.train_memory(frames[11], gts[11], 0.5)
-    assert not all(np.array_equal(a, b) for a, b in zip(before, bank.memory))
+        base.detect_scales(frames[k], [window(base, gts[k])], [1.0], 1.0, climb=False)
+        base.train(frames[k], gts[k], 1.0)
+    before = [m.copy() for m in base.memory]
+    base.train_memory(frames[11], gts[11], 0.5)
+    assert not all(np.array_equal(a, b) for a, b in zip(before, base.memory))
 
 
 def test_eco_configuration_tracks_through_the_pole_and_learns_only_confident_frames(scene) -> None:

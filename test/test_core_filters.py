@@ -148,7 +148,7 @@ def test_filter_params_validate() -> None:
 
 
 def test_large_targets_are_tracked_at_half_resolution() -> None:
-    from swir_tracker_ros.core.filters import make_filter
+    from swir_tracker_ros.core.registry import make_filter
 
     small, large = make_filter(KCFParams(), 40, 80), make_filter(KCFParams(), 100, 120)
     assert small.model_scale == 1.0 and (small.tw, small.th) == (100, 200)
@@ -182,17 +182,17 @@ def test_fhog_orientation_binning_hard_and_soft() -> None:
 def test_grid_features_cut_from_the_union_match_single_windows(feature: str) -> None:
     """The 3x3 grid's maps come from one feature computation on the union; away from the window borders
     (where FHOG's block normalisation sees different neighbours) they equal per-window features."""
-    from swir_tracker_ros.core.filters import make_filter
+    from swir_tracker_ros.core.registry import make_filter
 
     img = textured(300, 360, seed=4)
-    bank = make_filter(KCFParams(feature=feature), 22.0, 44.0)
-    window = search_window(181.3, 149.7, 22.0 * 1.04, 44.0 * 1.04, bank.padding)
-    grid, wins = bank.grid_features(img, window, 1.0 / 3.0)
+    base = make_filter(KCFParams(feature=feature), 22.0, 44.0)
+    window = search_window(181.3, 149.7, 22.0 * 1.04, 44.0 * 1.04, base.padding)
+    grid, wins = base.grid_features(img, window, 1.0 / 3.0)
     assert len(wins) == 9 and wins[4] == window
     steps = {round(wins[1].cx - wins[0].cx, 6), round(wins[2].cx - wins[1].cx, 6)}
     assert len(steps) == 1  # a regular grid; overlap within half a cell of 1/3
-    assert abs(1.0 - (wins[1].cx - wins[0].cx) / window.w - 1.0 / 3.0) <= 0.5 * bank.cell / bank.tw + 1e-9
-    single = bank.features(img, wins)
+    assert abs(1.0 - (wins[1].cx - wins[0].cx) / window.w - 1.0 / 3.0) <= 0.5 * base.cell / base.tw + 1e-9
+    single = base.features(img, wins)
     b = 2 if feature == "hog" else 1
     # (warpAffine quantises sample positions to 1/32 px, hence the tolerance)
     assert np.allclose(grid[:, :, b:-b, b:-b], single[:, :, b:-b, b:-b], atol=5e-3)

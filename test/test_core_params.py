@@ -13,9 +13,8 @@ from conftest import REPO
 from swir_tracker_ros.configs import BASES, CONFIGURATIONS, DEFAULT_CONFIGURATION, configuration
 from swir_tracker_ros.core.base import BaseFilter
 from swir_tracker_ros.core.dcf_ca import DCFCAParams
-from swir_tracker_ros.core.eco.base import ECOBase
-from swir_tracker_ros.core.filters import FILTERS, make_filter
 from swir_tracker_ros.core.kcf import KCFParams
+from swir_tracker_ros.core.registry import BASE_FILTERS, make_filter
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman import HUBER_K, Huber
 from swir_tracker_ros.nodes.param_docs import markdown_table
@@ -73,9 +72,9 @@ def test_an_unknown_configuration_or_base_names_the_known_ones() -> None:
 
 
 def test_the_base_filter_is_chosen_by_the_type_of_its_params() -> None:
-    for params_cls, filter_cls in FILTERS.items():
-        assert issubclass(filter_cls, BaseFilter) or filter_cls is ECOBase  # ECO: its own geometry
-        assert isinstance(make_filter(params_cls(), 40.0, 100.0), filter_cls)
+    for name, filter_cls in BASE_FILTERS.items():
+        assert issubclass(filter_cls, BaseFilter) and filter_cls.name == name  # the one interface
+        assert isinstance(make_filter(filter_cls.Params(), 40.0, 100.0), filter_cls)
     with pytest.raises(ParameterError, match="no base filter takes MotionParams"):
         make_filter(MotionParams(), 40.0, 100.0)
 
@@ -127,7 +126,7 @@ def test_one_validation_names_the_nested_parameter() -> None:
         p.validate()
     with pytest.raises(ParameterError, match=r"parameter scale must be a ScaleSearchParams"):
         TrackerParams(scale=None).validate()  # a policy every tracker has cannot be left out
-    with pytest.raises(ParameterError, match=r"parameter base must be a KCFParams or DCFCAParams or BACF"):
+    with pytest.raises(ParameterError, match=r"parameter base must be a FilterParams"):
         TrackerParams(base=MotionParams()).validate()
     assert isinstance(TrackerParams().base, KCFParams)
 

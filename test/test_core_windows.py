@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from swir_tracker_ros.configs import configuration
-from swir_tracker_ros.core import base, kcf
-from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core import kcf, template
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import is_smooth, nearest_smooth_count, template_size
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.tracker import Tracker, TrackerParams
@@ -124,7 +124,7 @@ def test_training_features_are_computed_once_a_frame_with_the_same_results(
     tracker's results are those of computing the maps for each (bit for bit)."""
     frames, box, _ = _sequence(sequences_dir, "otb_jogging-1", 60)
     calls = {"computed": 0, "training": 0}
-    features, training = base.BaseFilter.features, base.BaseFilter.training_features
+    features, training = template.TemplateFilter.features, template.TemplateFilter.training_features
     inside = [False]
 
     def count_features(self, img, windows):
@@ -139,8 +139,8 @@ def test_training_features_are_computed_once_a_frame_with_the_same_results(
         finally:
             inside[0] = False
 
-    monkeypatch.setattr(base.BaseFilter, "features", count_features)
-    monkeypatch.setattr(base.BaseFilter, "training_features", count_training)
+    monkeypatch.setattr(template.TemplateFilter, "features", count_features)
+    monkeypatch.setattr(template.TemplateFilter, "training_features", count_training)
     cached = _track(frames, box, pipeline)
     saved = calls["training"] - calls["computed"]
     assert saved > 10  # the memory trained on many frames without a second feature computation
@@ -148,7 +148,7 @@ def test_training_features_are_computed_once_a_frame_with_the_same_results(
     def uncached(self, img, windows):
         return features(self, img, windows)
 
-    monkeypatch.setattr(base.BaseFilter, "training_features", uncached)
+    monkeypatch.setattr(template.TemplateFilter, "training_features", uncached)
     assert _track(frames, box, pipeline) == cached
 
 

@@ -69,13 +69,16 @@ def _params_dataclasses() -> set[type]:
 
 
 def _reachable(cls: type) -> set[type]:
-    """cls and every params dataclass its fields may hold (a union's members: the base filters)."""
+    """cls and every params dataclass its fields may hold (a union's members, a base class's subclasses:
+    the base filters' Params)."""
     out = {cls}
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         for kind in (hints[f.name], *typing.get_args(hints[f.name])):
             if dataclasses.is_dataclass(kind):
                 out |= _reachable(kind)
+    for sub in cls.__subclasses__():
+        out |= _reachable(sub)
     return out
 
 

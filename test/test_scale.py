@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from swir_tracker_ros.configs import configuration
-from swir_tracker_ros.core.base import BaseFilter
 from swir_tracker_ros.core.dcf_ca import DCFCAParams
-from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.scale import DSSTParams, ScaleFilter, scale_patches
+from swir_tracker_ros.core.template import TemplateFilter
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.policies.scale_search import ScaleSearch
 from swir_tracker_ros.tracker import Tracker, TrackerParams
@@ -73,11 +73,11 @@ def test_default_is_the_scale_search(sequences_dir: Path) -> None:
     p = TrackerParams()
     assert p.base.scale_estimator == "search" and DCFCAParams().scale_estimator == "search"
     img, box = real_frame(sequences_dir, "otb_crossing", 10)
-    bank = make_filter(p.base, box.w, box.h)
-    bank.initialise(img, box)
-    assert bank.scale_filter is None
+    base = make_filter(p.base, box.w, box.h)
+    base.initialise(img, box)
+    assert base.scale_filter is None
     wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in (0.95, 1.0, 1.05)]
-    dets = bank.detect(img, wins, [0.95, 1.0, 1.05])
+    dets = base.detect(img, wins, [0.95, 1.0, 1.05])
     assert [d.window for d in dets] == wins and [d.scale for d in dets] == [0.95, 1.0, 1.05]
 
 
@@ -101,13 +101,13 @@ def test_tracker_with_dsst_follows_a_zoom(sequences_dir: Path, pipeline: str) ->
     assert r.state is TrackState.TRACKING
     assert abs(r.box.w / box.w / true - 1.0) < 0.05 and abs(r.box.h / box.h / true - 1.0) < 0.05, r.box
     assert abs(r.box.cx - box.cx) < 3.0 and abs(r.box.cy - box.cy) < 3.0
-    bank = make_filter(p.base, box.w, box.h)
-    bank.initialise(frames[0], box)
-    bank.start_memory()
+    base = make_filter(p.base, box.w, box.h)
+    base.initialise(frames[0], box)
+    base.start_memory()
     wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in (0.95, 1.0, 1.05)]
-    dets = bank.detect(frames[-1], wins, [0.95, 1.0, 1.05])
+    dets = base.detect(frames[-1], wins, [0.95, 1.0, 1.05])
     assert len(dets) == 3 and dets[0] is dets[1] is dets[2] and dets[0].window == wins[1]
-    assert np.isfinite(bank.memory_score(2))  # any window index reads the middle window's features
+    assert np.isfinite(base.memory_score(2))  # any window index reads the middle window's features
 
 
 def test_interpolated_response_measures_changes_below_one_step(sequences_dir: Path) -> None:
@@ -134,32 +134,32 @@ def test_the_scale_climb_picks_what_the_full_search_picks(sequences_dir: Path, s
     predicted size is right."""
     img, box = real_frame(sequences_dir, seq, 10)
     p = TrackerParams()
-    bank = make_filter(p.base, box.w, box.h)
-    bank.initialise(img, box)
-    bank.start_memory()
+    base = make_filter(p.base, box.w, box.h)
+    base.initialise(img, box)
+    base.start_memory()
     factors = ScaleSearch(p.scale).normal
     counted: list[int] = []
-    orig = bank.features
-    bank.features = lambda im, wins: counted.append(len(wins)) or orig(im, wins)  # type: ignore[method-assign]
+    orig = base.features
+    base.features = lambda im, wins: counted.append(len(wins)) or orig(im, wins)  # type: ignore[method-assign]
     picked = set()
     for z in (0.86, 0.9, 0.95, 1.0, 1.05, 1.11, 1.16):
         frame = zoom(img, box.cx, box.cy, z)
         wins = [Box.from_center(box.cx, box.cy, box.w * f * 2.5, box.h * f * 2.5) for f in factors]
-        full, best, first = bank.detect_scales(frame, wins, factors, p.scale.penalty, climb=False)
+        full, best, first = base.detect_scales(frame, wins, factors, p.scale.penalty, climb=False)
         assert first == 0 and len(full) == 5
-        full_memory = bank.memory_score(best)
+        full_memory = base.memory_score(best)
         counted.clear()
-        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale.penalty, climb=True)
+        dets, b, lo = base.detect_scales(frame, wins, factors, p.scale.penalty, climb=True)
         assert lo + b == best, z
         for d, f in zip(dets, full[lo : lo + len(dets)]):  # float32 sums of other batch sizes: rounding
             assert d.window == f.window and d.peak == pytest.approx(f.peak, rel=1e-4)
             assert (d.cx, d.cy) == pytest.approx((f.cx, f.cy), abs=1e-3)
-        assert bank.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
+        assert base.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
         assert sum(counted) == len(dets) < 5 or best in (0, 4), (z, counted)
         # a best peak below the floor (a frame unlike the tracked ones): every window, the full search's pick
-        dets, b, lo = bank.detect_scales(frame, wins, factors, p.scale.penalty, climb=True, floor=math.inf)
+        dets, b, lo = base.detect_scales(frame, wins, factors, p.scale.penalty, climb=True, floor=math.inf)
         assert (len(dets), lo, b) == (5, 0, best) and [d.window for d in dets] == wins
-        assert bank.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
+        assert base.memory_score(b) == pytest.approx(full_memory, rel=1e-4)
         picked.add(best)
     assert {0, 2, 4} <= picked  # the zooms moved the winner to both ends
 
@@ -172,7 +172,7 @@ def test_the_scale_climb_tracks_a_real_sequence_as_the_full_search(sequences_dir
     gt = Box(*map(float, (sequences_dir / "otb_crossing" / "gt.txt").read_text().split()[0].split(",")))
     frames = [cv2.imread(str(f), cv2.IMREAD_GRAYSCALE) for f in pngs]
     results, windows = {}, {}
-    orig = BaseFilter.features
+    orig = TemplateFilter.features
     for climb in (True, False):
         p = TrackerParams()
         p.scale.climb = climb
@@ -185,7 +185,7 @@ def test_the_scale_climb_tracks_a_real_sequence_as_the_full_search(sequences_dir
             return orig(self, im, w)
 
         with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(BaseFilter, "features", counting)
+            mp.setattr(TemplateFilter, "features", counting)
             results[climb] = [trk.update(f) for f in frames[1:]]
         windows[climb] = n[0] / (len(frames) - 1)
     for a, b in zip(results[True], results[False]):

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.filters import make_filter
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import scale_windows
 from swir_tracker_ros.harness.evaluate import run_source
 from swir_tracker_ros.harness.metrics import occlusion_episodes
@@ -165,13 +165,13 @@ def test_a_size_that_shrank_while_the_target_turned_grows_back(sequences_dir: Pa
         of `ScaleSearch`, as the tracker runs it while re-detecting)."""
         p = TrackerParams()
         p.scale.redetect_scales = factor
-        bank = make_filter(p.base, gt.w, gt.h)
-        bank.initialise(f10, gt)
+        base = make_filter(p.base, gt.w, gt.h)
+        base.initialise(f10, gt)
         search = ScaleSearch(p.scale)
-        factors = search.factors(bank, occluded=1)  # re-detecting
-        wins = scale_windows(small.cx, small.cy, small.w, small.h, bank.padding, factors)
-        dets, best, _ = bank.detect_scales(f11, wins, factors, p.scale.penalty, climb=False)
-        assert not bank.failed(dets[best]), dets[best]
+        factors = search.factors(base, occluded=1)  # re-detecting
+        wins = scale_windows(small.cx, small.cy, small.w, small.h, base.padding, factors)
+        dets, best, _ = base.detect_scales(f11, wins, factors, p.scale.penalty, climb=False)
+        assert not base.failed(dets[best]), dets[best]
         return dets[best].scale, dets[best].peak
 
     (off, off_peak), (on, on_peak) = growth(0.0), growth(1.2)

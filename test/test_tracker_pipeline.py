@@ -12,7 +12,8 @@ import pytest
 
 from swir_tracker_ros.configs import configuration
 from swir_tracker_ros.core.conditioning import ConditioningConfig
-from swir_tracker_ros.core.filters import KCFFilter, make_filter
+from swir_tracker_ros.core.filters import KCFFilter
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.kalman import PAPER000_KCF
 from swir_tracker_ros.policies.motion import MotionFilter
@@ -168,9 +169,9 @@ def test_adaptive_r_adapts_the_position_noise_only(scene) -> None:
     the warm-up, its size block stays nominal; without adaptive_r R never changes."""
     _, gts, _ = scene
     box = gts[0]
-    bank = make_filter(configuration("robust_adaptive_r").base, box.w, box.h)
+    base = make_filter(configuration("robust_adaptive_r").base, box.w, box.h)
     for name, adapts in (("robust_adaptive_r", True), ("robust", False)):
-        motion = MotionFilter(configuration(name).motion, bank, box)
+        motion = MotionFilter(configuration(name).motion, base, box)
         R0 = motion.kf.R.copy()
         rng = np.random.default_rng(1)
         for _ in range(60):

@@ -10,8 +10,8 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.filters import make_filter
 from swir_tracker_ros.core.kcf import KCFParams
+from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.harness.evaluate import run_starts
 from swir_tracker_ros.harness.metrics import sre_box
@@ -122,12 +122,12 @@ def test_lattice_finds_a_target_midway_between_grid_windows() -> None:
     img = img.astype("float32") / 65535.0
     p = TrackerParams()
     r = p.redetection
-    bank = make_filter(p.base, box.w, box.h)
-    bank.initialise(img, box)
-    at = bank.detect(img, [search_window(box.cx, box.cy, box.w, box.h, bank.padding)])[0].peak
-    off = search_window(box.cx + box.w * (1.0 + bank.padding) / 3.0, box.cy, box.w, box.h, bank.padding)
-    grid = max(d.peak for d in bank.detect_grid(img, off, r.grid_overlap)[0])
-    lattice, wins = bank.detect_lattice(img, off, r.lattice_step, r.lattice_rings,
+    base = make_filter(p.base, box.w, box.h)
+    base.initialise(img, box)
+    at = base.detect(img, [search_window(box.cx, box.cy, box.w, box.h, base.padding)])[0].peak
+    off = search_window(box.cx + box.w * (1.0 + base.padding) / 3.0, box.cy, box.w, box.h, base.padding)
+    grid = max(d.peak for d in base.detect_grid(img, off, r.grid_overlap)[0])
+    lattice, wins = base.detect_lattice(img, off, r.lattice_step, r.lattice_rings,
                                         channels=r.lattice_channels)
     best = max(lattice, key=lambda d: d.peak)
     assert best.peak > 0.75 * at > grid
@@ -143,9 +143,9 @@ def test_lattice_widens_with_the_frames_since_the_last_confident_frame() -> None
 
 
 def test_lattice_leaves_out_windows_centred_outside_the_image() -> None:
-    bank = make_filter(TrackerParams().base, 20.0, 40.0)
-    win = search_window(5.0, 5.0, 20.0, 40.0, bank.padding)
-    _sx, _sy, offsets, wins = bank.lattice_geometry(win, 0.35, 2, (320, 240))
+    base = make_filter(TrackerParams().base, 20.0, 40.0)
+    win = search_window(5.0, 5.0, 20.0, 40.0, base.padding)
+    _sx, _sy, offsets, wins = base.lattice_geometry(win, 0.35, 2, (320, 240))
     assert (0, 0) not in offsets
     assert all(0.0 <= w.cx < 320 and 0.0 <= w.cy < 240 for w in wins)
     assert len(wins) == 8  # the quarter of the 5x5 lattice to the right of and below the corner
@@ -153,10 +153,10 @@ def test_lattice_leaves_out_windows_centred_outside_the_image() -> None:
 
 def test_lattice_checkerboard_halves_cover_the_outer_rings_on_alternate_frames() -> None:
     """`lattice_alternate` 2: ring 1 in both halves, rings 2-3 split into two disjoint checkerboards."""
-    bank = make_filter(TrackerParams().base, 20.0, 40.0)
-    win = search_window(400.0, 400.0, 20.0, 40.0, bank.padding)
-    full = bank.lattice_geometry(win, 0.35, 3)[2]
-    halves = [bank.lattice_geometry(win, 0.35, 3, half=(2, parity))[2] for parity in (0, 1)]
+    base = make_filter(TrackerParams().base, 20.0, 40.0)
+    win = search_window(400.0, 400.0, 20.0, 40.0, base.padding)
+    full = base.lattice_geometry(win, 0.35, 3)[2]
+    halves = [base.lattice_geometry(win, 0.35, 3, half=(2, parity))[2] for parity in (0, 1)]
     inner = {o for o in full if max(abs(o[0]), abs(o[1])) <= 1}
     assert inner <= set(halves[0]) and inner <= set(halves[1])
     assert (set(halves[0]) - inner).isdisjoint(set(halves[1]) - inner)
@@ -174,13 +174,13 @@ def test_a_target_two_lattice_steps_away_is_found_by_the_half_that_holds_its_win
     img = img.astype("float32") / 65535.0
     p = TrackerParams()
     step, channels = p.redetection.lattice_step, p.redetection.lattice_channels
-    bank = make_filter(p.base, box.w, box.h)
-    bank.initialise(img, box)
-    centred = search_window(box.cx, box.cy, box.w, box.h, bank.padding)
-    at = bank.detect(img, [centred])[0].peak
-    sx = bank.lattice_geometry(centred, step, 2)[0]
-    off = centred.shifted(-2 * sx * bank.cell * centred.w / bank.tw, 0.0)
-    found = [max(bank.detect_lattice(img, off, step, 2, half=(2, k), channels=channels)[0],
+    base = make_filter(p.base, box.w, box.h)
+    base.initialise(img, box)
+    centred = search_window(box.cx, box.cy, box.w, box.h, base.padding)
+    at = base.detect(img, [centred])[0].peak
+    sx = base.lattice_geometry(centred, step, 2)[0]
+    off = centred.shifted(-2 * sx * base.cell * centred.w / base.tw, 0.0)
+    found = [max(base.detect_lattice(img, off, step, 2, half=(2, k), channels=channels)[0],
                  key=lambda d: d.peak) for k in (0, 1)]
     assert found[0].peak > 0.9 * at
     assert abs(found[0].cx - box.cx) < 0.1 * box.w
@@ -196,16 +196,16 @@ def test_the_principal_channel_screen_keeps_the_full_lattice_winner(steps: tuple
     img, truths = built.world.render(0.0, CameraView(0.0, 0.0, 8.0))
     box = next(tr for tr in truths if tr.id == built.target_id).box
     img = img.astype("float32") / 65535.0
-    full_bank = make_filter(KCFParams(), box.w, box.h)
+    full = make_filter(KCFParams(), box.w, box.h)
     screened = make_filter(KCFParams(), box.w, box.h)
-    centred = search_window(box.cx, box.cy, box.w, box.h, full_bank.padding)
+    centred = search_window(box.cx, box.cy, box.w, box.h, full.padding)
     best, counts = [], []
-    for bank, channels in ((full_bank, 0), (screened, 8)):
-        bank.initialise(img, box)
-        sx, sy = bank.lattice_geometry(centred, 0.35, 3)[:2]
-        k = bank.cell * centred.w / bank.tw
-        off = centred.shifted(-steps[0] * sx * k, -steps[1] * sy * bank.cell * centred.h / bank.th)
-        dets, wins = bank.detect_lattice(img, off, 0.35, 3, channels=channels)
+    for base, channels in ((full, 0), (screened, 8)):
+        base.initialise(img, box)
+        sx, sy = base.lattice_geometry(centred, 0.35, 3)[:2]
+        k = base.cell * centred.w / base.tw
+        off = centred.shifted(-steps[0] * sx * k, -steps[1] * sy * base.cell * centred.h / base.th)
+        dets, wins = base.detect_lattice(img, off, 0.35, 3, channels=channels)
         best.append(max(dets, key=lambda d: d.peak))
         counts.append(len(dets))
     assert counts == [len(wins), 3] and len(wins) > 3  # every window in full, then the 3 screened ones

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from types import ModuleType
 
 from swir_tracker_ros.configs import cf, eco, kalman, measured, robust, robust_adaptive, robust_adaptive_r
+from swir_tracker_ros.core.registry import BASE_FILTERS
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param
 from swir_tracker_ros.tracker_params import TrackerParams
@@ -25,8 +26,8 @@ CONFIGURATIONS: dict[str, Callable[[str | None], TrackerParams]] = {
 }
 """Every named configuration: name -> builder(base name or None)."""
 DEFAULT_CONFIGURATION = "measured"
-BASES = ("kcf", "dcf_ca", "bacf", "eco")
-"""The base filters a configuration can be built on (configs/bases.py)."""
+BASES = tuple(BASE_FILTERS)
+"""The base filters a configuration can be built on (core/registry.py)."""
 
 
 def configuration(name: str, base: str | None = None) -> TrackerParams:

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The base trackers, one class each, and `make_filter`, which builds the one its Params belong to."""
+"""The correlation base filters on a resampled template (`TemplateFilter`): paper 000 KCF, the
+dissertation's DCF-CA, BACF; one class each."""
 
 from __future__ import annotations
 
@@ -11,20 +12,18 @@ from typing import Any
 import numpy as np
 
 from swir_tracker_ros.core.bacf import BACF, BACFParams
-from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.core.confidence import psr
 from swir_tracker_ros.core.dcf_ca import DCFCA, DCFCAParams, context_offsets
-from swir_tracker_ros.core.eco.base import ECOBase
-from swir_tracker_ros.core.eco.params import ECOParams
+from swir_tracker_ros.core.detection import Detection
 from swir_tracker_ros.core.features import feature_shape
 from swir_tracker_ros.core.kcf import KCF, KCFParams
+from swir_tracker_ros.core.template import TemplateFilter
 from swir_tracker_ros.core.windows import search_window, template_size
-from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.kalman import DISSERTATION_DCFCA, PAPER000_KCF, BoxModel, dcfca_box_model, kcf_box_model
 from swir_tracker_ros.types import Box
 
 
-class KCFFilter(BaseFilter):
+class KCFFilter(TemplateFilter):
     """Paper 000 pipeline: KCF on FHOG (eq. 3-8), PSR failure test, peak-gated update, 7-state box model.
 
     Failure: PSR < `psr_threshold` (paper 000 eq. 10, threshold 7). Update only when the peak exceeds
@@ -32,6 +31,7 @@ class KCFFilter(BaseFilter):
     """
 
     name = "kcf"
+    Params = KCFParams
     robust_method = "A4"
     threshold_map = PAPER000_KCF
     psr_reacquisition = True
@@ -81,7 +81,7 @@ class KCFFilter(BaseFilter):
         return kcf_box_model()
 
 
-class DCFCAFilter(BaseFilter):
+class DCFCAFilter(TemplateFilter):
     """Dissertation pipeline: context-aware DCF (eq. 4.90-4.92), APCE tests (eq. 4.96-4.97), 8-state model.
 
     Failure: APCE <= `apce_occlusion_ratio` x the mean APCE of every frame so far (eq. 4.96); update only
@@ -91,6 +91,7 @@ class DCFCAFilter(BaseFilter):
     """
 
     name = "dcf_ca"
+    Params = DCFCAParams
     robust_method = "A2"
     threshold_map = DISSERTATION_DCFCA
 
@@ -147,6 +148,7 @@ class BACFFilter(KCFFilter):
     """
 
     name = "bacf"
+    Params = BACFParams
     psr_reacquisition = False  # its flatter responses keep PSRs near 7 on the target
     # its failure test has no state either, but the look-alike guard and the long-loss sweep were never
     # measured on BACF's responses
@@ -237,18 +239,3 @@ class BACFFilter(KCFFilter):
             self._psr_n += 1
         return ok
 
-
-FILTERS: dict[type, type] = {
-    KCFParams: KCFFilter, DCFCAParams: DCFCAFilter, BACFParams: BACFFilter, ECOParams: ECOBase,
-}
-"""The base tracker class of each filter Params class (`TrackerParams.base`)."""
-
-
-def make_filter(fp: Any, w: float, h: float) -> BaseFilter | ECOBase:
-    """The base tracker whose Params `fp` is, for a first box of size w x h (ParameterError if none)."""
-    try:
-        cls = FILTERS[type(fp)]
-    except KeyError:
-        known = ", ".join(c.__name__ for c in FILTERS)
-        raise ParameterError(f"no base filter takes {type(fp).__name__} (known: {known})") from None
-    return cls(fp, w, h)

@@ -37,6 +37,7 @@ import cv2
 import numpy as np
 import scipy.fft as sfft
 
+from swir_tracker_ros.core.base import FilterParams
 from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.fhog import fhog
 from swir_tracker_ros.core.windows import FFT_SIZES
@@ -83,7 +84,7 @@ class DSSTParams:
 
 
 @dataclass
-class ScaleOptions:
+class ScaleOptions(FilterParams):
     """Size estimation, template geometry and response analysis of a base filter: the fields every
     filter's Params shares (KCFParams, DCFCAParams inherit them, so they are declared once)."""
 

@@ -103,7 +103,7 @@ class LookalikeGuard:
         ex, ey = self.trail.ego
         return x1 + vx * dt + ex, y1 + vy * dt + ey, vx, vy
 
-    def check(self, bank: BaseFilter, img: np.ndarray, det: Detection, pred: Box, wins: list[Box],
+    def check(self, base: BaseFilter, img: np.ndarray, det: Detection, pred: Box, wins: list[Box],
               factors: tuple[float, ...], verdict: OcclusionVerdict) -> Takeback | None:
         """The take-back of a tracked frame won by `det` (windows `wins` of sizes `factors` around the
         prediction `pred`), or None when the first peak stays."""
@@ -124,8 +124,8 @@ class LookalikeGuard:
         self.departed += 1
         if self.departed > CHECKS:  # the target moved off the reference itself (see the class)
             return None
-        extra = scale_windows(rx, ry, pred.w, pred.h, bank.padding, (1.0,))[0]
-        dets = bank.detect(img, [*wins, extra], [*factors, 1.0])
+        extra = scale_windows(rx, ry, pred.w, pred.h, base.padding, (1.0,))[0]
+        dets = base.detect(img, [*wins, extra], [*factors, 1.0])
         alt = dets[-1]
         # taking the box back is a re-acquisition: the peak there also passes its bars (peak, PSR)
         if (apart(alt.cx, alt.cy, rx, ry) <= d / 2 and apart(alt.cx, alt.cy, det.cx, det.cy) >= d / 2

@@ -39,10 +39,10 @@ class AppearanceMemory:
     (`BaseFilter.start_memory`), which scores the windows of its last detection.
     """
 
-    def __init__(self, p: MemoryParams, bank: BaseFilter) -> None:
+    def __init__(self, p: MemoryParams, base: BaseFilter) -> None:
         self.p = p
-        self.bank = bank
-        bank.start_memory()
+        self.base = base
+        base.start_memory()
         self.peak_sum, self.peak_n = 0.0, 0  # memory peaks of the verified frames
 
     def mean_bar(self, ratio: float) -> float:
@@ -54,12 +54,12 @@ class AppearanceMemory:
         mean)? No side effects; before the first verified frame, yes."""
         if not self.peak_n:
             return True
-        return self.bank.memory_score(index) >= self.mean_bar(self.p.ratio)
+        return self.base.memory_score(index) >= self.mean_bar(self.p.ratio)
 
     def verdict(self, index: int) -> tuple[bool, bool]:
         """(rejected, learn) for a non-failed frame won by window `index`; `learn`: the caller trains the
         memory on the frame's posterior box (`learn`)."""
-        m = self.bank.memory_score(index)
+        m = self.base.memory_score(index)
         mean = self.peak_sum / self.peak_n if self.peak_n else m
         if m < self.p.ratio * mean:
             return True, False
@@ -69,4 +69,4 @@ class AppearanceMemory:
 
     def learn(self, img: np.ndarray, box: Box) -> None:
         """Blend the memory with the window around `box` at `rate`."""
-        self.bank.train_memory(img, box, self.p.rate)
+        self.base.train_memory(img, box, self.p.rate)

@@ -70,14 +70,14 @@ class MotionParams:
 class MotionFilter:
     """The box's Kalman filter: prediction over frame periods, ego shifts, and the updates of the loop."""
 
-    def __init__(self, p: MotionParams, bank: BaseFilter, box: Box) -> None:
+    def __init__(self, p: MotionParams, base: BaseFilter, box: Box) -> None:
         self.p = p
-        self.model = model = bank.box_model(box.w, box.h)
+        self.model = model = base.box_model(box.w, box.h)
         self.size_rates = [i for i, n in enumerate(model.names) if n in SIZE_RATES]
         self.centre_rates = [i for i, n in enumerate(model.names) if n in CENTRE_RATES]
-        self.threshold_map = bank.threshold_map
+        self.threshold_map = base.threshold_map
         if p.robust:
-            method = p.method if p.method != "auto" else bank.robust_method
+            method = p.method if p.method != "auto" else base.robust_method
             self.kf: KalmanFilter = RobustKalmanFilter(
                 model, influence=Huber(p.fixed_threshold), robust_components=(0, 1), method=method
             )

@@ -99,7 +99,7 @@ class Redetection:
         grow = occluded // p.lattice_widen_frames if p.lattice_widen_frames > 0 else 0
         return max(p.lattice_rings, min(p.lattice_rings + grow, p.lattice_max_rings))
 
-    def search(self, bank: BaseFilter, img: np.ndarray, pred: Box, scales: ScaleResult,
+    def search(self, base: BaseFilter, img: np.ndarray, pred: Box, scales: ScaleResult,
                occluded: int) -> Found:
         """Search around the prediction `pred` after the scale search `scales` failed; the normal-mode
         detections stay candidates (the target may still be at the prediction)."""
@@ -107,16 +107,16 @@ class Redetection:
         rings = self.rings(occluded) if self.lattice else 0
         if self.lattice:
             half = (p.lattice_alternate, occluded % 2) if p.lattice_alternate > 0 else None
-            cand, grid = bank.detect_lattice(img, wins[mid], p.lattice_step, rings, half=half,
+            cand, grid = base.detect_lattice(img, wins[mid], p.lattice_step, rings, half=half,
                                              channels=p.lattice_channels)
             grid = [wins[mid], *grid]
         else:  # one feature computation on the union of the 9 windows (per scale with grid_scale_search)
-            cand, grid = bank.detect_grid(img, wins[mid], p.grid_overlap)
+            cand, grid = base.detect_grid(img, wins[mid], p.grid_overlap)
         if p.grid_scale_search:
             cand = [*scales.dets, *cand]
             for i, f in enumerate(scales.factors):
                 if i != mid:
-                    cand += bank.detect_grid(img, wins[i], p.grid_overlap, scale=f)[0]
+                    cand += base.detect_grid(img, wins[i], p.grid_overlap, scale=f)[0]
         else:
             cand = [scales.dets[mid], *cand]
         det = max(cand, key=self.score(pred, wins[mid], rings))

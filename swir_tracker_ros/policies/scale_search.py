@@ -80,7 +80,7 @@ class ScaleSearch:
         half = p.n // 2
         self.normal = tuple(1.0 + p.step * i for i in range(-half, half + 1))  # e.g. (0.90, ..., 1.10)
 
-    def factors(self, bank: BaseFilter, occluded: int) -> tuple[float, ...]:
+    def factors(self, base: BaseFilter, occluded: int) -> tuple[float, ...]:
         """Sizes searched at the prediction: the normal ones, and while re-detecting (`redetect_scales`,
         the scale search) 1 / redetect_scales and redetect_scales at either end (ours).
 
@@ -90,16 +90,16 @@ class ScaleSearch:
         size never found her again. The two wide windows let one re-detection frame recover 20 %.
         """
         factors, r = self.normal, self.p.redetect_scales
-        if r > 0.0 and len(factors) > 1 and occluded > 0 and not bank.own_scale:
+        if r > 0.0 and len(factors) > 1 and occluded > 0 and not base.own_scale:
             factors = (1.0 / r, *factors, r)
         return factors
 
-    def search(self, bank: BaseFilter, img: np.ndarray, pred: Box, verdict: OcclusionVerdict) -> ScaleResult:
+    def search(self, base: BaseFilter, img: np.ndarray, pred: Box, verdict: OcclusionVerdict) -> ScaleResult:
         """The normal-mode search at the prediction `pred` (`BaseFilter.detect_scales`)."""
-        factors = self.factors(bank, verdict.occluded)
-        wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, bank.padding, factors)
+        factors = self.factors(base, verdict.occluded)
+        wins = scale_windows(pred.cx, pred.cy, pred.w, pred.h, base.padding, factors)
         climb = self.p.climb and verdict.occluded == 0
         floor = verdict.mean_bar(self.p.climb_ratio, math.inf)
-        dets, best, lo = bank.detect_scales(img, wins, factors, self.p.penalty, climb, floor)
+        dets, best, lo = base.detect_scales(img, wins, factors, self.p.penalty, climb, floor)
         mid = len(wins) // 2 - lo
         return ScaleResult(dets, best, wins[lo : lo + len(dets)], factors[lo : lo + len(dets)], mid)

@@ -95,7 +95,7 @@ class LongLossSweep:
         cx, cy = self.tiles.pop()
         return window.shifted(cx - window.cx, cy - window.cy)
 
-    def search(self, bank: BaseFilter, img: np.ndarray, pred: Box, window: Box, best: Detection,
+    def search(self, base: BaseFilter, img: np.ndarray, pred: Box, window: Box, best: Detection,
                verdict: OcclusionVerdict, memory: AppearanceMemory | None,
                scales: ScaleSearch) -> Jump | None:
         """One tile's search (see the class); `window` is the search window at the prediction, `best` the
@@ -106,8 +106,8 @@ class LongLossSweep:
         tile = self._next_tile(img, pred, window)
         with_memory = memory is not None and memory.peak_n > 0
         bar = memory.mean_bar(ratio) if with_memory else verdict.mean_bar(ratio) if verdict.peak_n else 0.0
-        with bank.memory_as_filter() if with_memory else contextlib.nullcontext():
-            dets, _ = bank.detect_lattice(img, tile, lat.lattice_step, lat.lattice_rings, centre=True,
+        with base.memory_as_filter() if with_memory else contextlib.nullcontext():
+            dets, _ = base.detect_lattice(img, tile, lat.lattice_step, lat.lattice_rings, centre=True,
                                           channels=lat.lattice_channels)
             if not dets:
                 return None
@@ -116,9 +116,9 @@ class LongLossSweep:
             if (near or verdict.failed(cand) or cand.peak < bar
                     or (not with_memory and cand.peak <= best.peak)):
                 return None
-            factors = scales.factors(bank, verdict.occluded)
-            wins = scale_windows(cand.cx, cand.cy, pred.w, pred.h, bank.padding, factors)
-            dets, i, _ = bank.detect_scales(img, wins, factors, scales.p.penalty, climb=False)
+            factors = scales.factors(base, verdict.occluded)
+            wins = scale_windows(cand.cx, cand.cy, pred.w, pred.h, base.padding, factors)
+            dets, i, _ = base.detect_scales(img, wins, factors, scales.p.penalty, climb=False)
             det = dets[i]
             if verdict.failed(det) or det.peak < bar or verdict.low_psr(det.psr):
                 return None

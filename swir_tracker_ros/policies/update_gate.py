@@ -41,13 +41,13 @@ class UpdateGate:
         self.p = p
         self.refused = 0  # tracked frames the gate refused since it last passed one
 
-    def rate(self, bank: BaseFilter, det: Detection, rejected: bool) -> float | None:
+    def rate(self, base: BaseFilter, det: Detection, rejected: bool) -> float | None:
         """The learning rate of this frame's update, None for no update. `rejected`: a failed or rejected
-        frame, which never teaches; the gate (`bank.confident`) is asked once per other frame."""
+        frame, which never teaches; the gate (`base.confident`) is asked once per other frame."""
         if rejected:
             return None
-        rate = bank.learning_rate
-        if not bank.confident(det):
+        rate = base.learning_rate
+        if not base.confident(det):
             self.refused += 1
             if self.p.unconfident_rate <= 0.0 or self.refused <= self.p.unconfident_after:
                 return None

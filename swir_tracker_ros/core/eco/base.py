@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """`ECOBase`: the ECO filter (core/eco/filter.py) as the long-term tracker's base filter.
 
-The tracker's policies drive a base filter through the surface of `core/base.py`'s `BaseFilter`: the scale
+The tracker's policies drive a base filter through the interface `core/base.py` `BaseFilter`: the scale
 search at the prediction (`detect_scales`), detection in other windows (`detect`, the re-detection grid and
 lattice), the failure test and the update gate, training on the posterior box, the Kalman box model and the
 peak -> Huber threshold map. ECO has its own sample geometry and scale estimate (fDSST), so the windows the
@@ -20,18 +20,18 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
+from swir_tracker_ros.core.base import BaseFilter
 from swir_tracker_ros.core.detection import Detection
 from swir_tracker_ros.core.eco.filter import ECODetection, ECOFilter
 from swir_tracker_ros.core.eco.localise import localise
 from swir_tracker_ros.core.eco.optimise import scores
 from swir_tracker_ros.core.eco.params import ECOParams
-from swir_tracker_ros.core.windows import grid_windows
-from swir_tracker_ros.kalman import PAPER000_KCF, BoxModel, ThresholdMap, kcf_box_model
+from swir_tracker_ros.kalman import PAPER000_KCF, BoxModel, kcf_box_model
 from swir_tracker_ros.types import Box
 
 
-class ECOBase:
-    """ECO behind the base-filter surface the tracker's policies use (module docstring).
+class ECOBase(BaseFilter):
+    """ECO as a `BaseFilter` (module docstring).
 
     Failure (`failed`) tests the detection's PSR against `failure_psr` (paper 000's PSR < 7; docs/eco.md,
     the loss signal) and against a fraction of its recent mean; a failed frame does not teach the filter,
@@ -39,8 +39,10 @@ class ECOBase:
     threshold map (eq. 38) and the A4 robust update.
     """
 
+    name = "eco"
+    Params = ECOParams
     robust_method = "A4"
-    threshold_map: ThresholdMap = PAPER000_KCF
+    threshold_map = PAPER000_KCF
     psr_reacquisition = False  # re-acquisition's PSR bar was measured on KCF's PSRs
     window_policies = True  # its failure test has no state: the PSR mean moves in `train`
     own_scale = True  # the size comes from ECO's scale estimate, not from windows of several sizes
@@ -125,30 +127,6 @@ class ECOBase:
         found = self._found = eco.detect_windows(img, [(b.cx, b.cy) for b in windows])
         factors = scales if scales is not None else [1.0] * len(windows)
         return [self._detection(d, s) for d, s in zip(found, factors)]
-
-    def detect_grid(self, img: np.ndarray, window: Box, overlap: float, scale: float = 1.0,
-                    skip_centre: bool = True) -> tuple[list[Detection], list[Box]]:
-        """The papers' 3x3 re-detection grid around `window` (windows overlapping by `overlap`)."""
-        wins = grid_windows(window, overlap)
-        keep = [w for k, w in enumerate(wins) if not (skip_centre and k == 4)]
-        return self.detect(img, keep, [scale] * len(keep)), wins
-
-    def detect_lattice(self, img: np.ndarray, window: Box, step: float, rings: int, scale: float = 1.0,
-                       half: tuple[int, int] | None = None, centre: bool = False,
-                       channels: int = 0) -> tuple[list[Detection], list[Box]]:
-        """The re-detection lattice (`MultiWindow.lattice_geometry`'s offsets, `step` x the window apart, in
-        image pixels) with windows centred in the image; `channels` is not used (no channel screen)."""
-        ih, iw = img.shape[:2]  # an ndarray or a SmoothedFrame (ECO samples both)
-        wins = []
-        for j in range(-rings, rings + 1):
-            for i in range(-rings, rings + 1):
-                if (i == 0 and j == 0 and not centre) or (
-                        half is not None and max(abs(i), abs(j)) >= half[0] and (i + j) % 2 != half[1]):
-                    continue
-                win = window.shifted(i * step * window.w, j * step * window.h)
-                if 0.0 <= win.cx < iw and 0.0 <= win.cy < ih:
-                    wins.append(win)
-        return self.detect(img, wins, [scale] * len(wins)), wins
 
     # ------------------------------------------------------------------ long-term memory (LCT style)
     def start_memory(self) -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from swir_tracker_ros.core.base import FilterParams
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
@@ -23,7 +24,7 @@ SCALE_ESTIMATORS = ("dsst", "search", "none")
 
 
 @dataclass
-class ECOParams:
+class ECOParams(FilterParams):
     """ECO base filter (ECO, CVPR 2017; C-COT, ECCV 2016); see docs/eco.md."""
 
     # image sample (ECO-HC)
