@@ -66,7 +66,8 @@ print(json.dumps({"times": times, "cpu": time.process_time() - c0}))
 def time_eco(frames: np.ndarray, box: tuple[float, ...], estimator: str = "dsst") -> dict:
     """Per-frame times of the short-term ECO tracker (core/eco/tracker.py) on `frames` (8 or 16 bit)."""
     from swir_tracker_ros.core import fhog
-    from swir_tracker_ros.core.eco import ECOParams, ECOTracker
+    from swir_tracker_ros.core.eco.params import ECOParams
+    from swir_tracker_ros.core.eco.tracker import ECOTracker
     from swir_tracker_ros.types import Box
 
     fhog.warm_up()
@@ -146,16 +147,15 @@ def main() -> None:
     args = ap.parse_args()
     root = Path(args.sequences)
     names = args.names.split(",") if args.names else sorted(p.name for p in root.iterdir() if p.is_dir())
-    rows, total = [], {"eco": [0, 0.0], "eco_search": [0, 0.0], "port": [0, 0.0]}
+    rows, total = [], {"eco": [0, 0.0], "port": [0, 0.0]}
     print(
-        f"{'sequence':22s} {'frames':>6s} {'ECO dsst':>9s} {'ECO search':>10s} {'ECO-HC port':>11s}",
+        f"{'sequence':22s} {'frames':>6s} {'ECO dsst':>9s} {'ECO-HC port':>11s}",
         "(CPU fps)",
     )
     for name in names:
         frames, box = load_sequence(root / name, args.frames)
         res = {
             "eco": time_eco(frames, box, "dsst"),
-            "eco_search": time_eco(frames, box, "search"),
             "port": time_port(frames, box),
         }
         n = len(frames) - 1
@@ -164,15 +164,15 @@ def main() -> None:
                 total[k][0] += n
                 total[k][1] += n / r["cpu_fps"]
         cells = [
-            f"{res[k]['cpu_fps']:>9.1f}" if res[k] else f"{'-':>9s}" for k in ("eco", "eco_search", "port")
+            f"{res[k]['cpu_fps']:>9.1f}" if res[k] else f"{'-':>9s}" for k in ("eco", "port")
         ]
-        print(f"{name:22s} {n:6d} {cells[0]} {cells[1]:>10s} {cells[2]:>11s}")
+        print(f"{name:22s} {n:6d} {cells[0]} {cells[1]:>11s}")
         rows.append({"sequence": name, "frames": n, **{k: v.get("cpu_fps") for k, v in res.items()}})
     summary = {k: (v[0] / v[1] if v[1] else None) for k, v in total.items()}
     print(
         f"{'all (frames / CPU s)':22s} {'':6s} "
         + " ".join(
-            f"{summary[k]:>9.1f}" if summary[k] else f"{'-':>9s}" for k in ("eco", "eco_search", "port")
+            f"{summary[k]:>9.1f}" if summary[k] else f"{'-':>9s}" for k in ("eco", "port")
         )
     )
     print(json.dumps({"cpu_fps": summary, "sequences": rows}))

@@ -13,14 +13,13 @@ from pathlib import Path
 
 from swir_tracker_ros.configs import ConfigurationChoice
 from swir_tracker_ros.demo import config as demo_config
+from swir_tracker_ros.harness.store import REPO
 from swir_tracker_ros.nodes import acquisition_node, positioner_node, tracker_endpoints, tracker_node
 from swir_tracker_ros.nodes.param_docs import ParamsFile, markdown_table, marker, params_yaml, replace_block
 from swir_tracker_ros.nodes.tracker_node_params import TrackerNodeParams
 from swir_tracker_ros.pelco.params import PositionerParams
 from swir_tracker_ros.simulation import scene_camera_node
 from swir_tracker_ros.tracker import TrackerParams
-
-REPO = Path(__file__).resolve().parents[1]
 
 
 def params_files() -> list[ParamsFile]:

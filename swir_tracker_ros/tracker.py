@@ -10,23 +10,13 @@ import numpy as np
 
 from swir_tracker_ros.configs import DEFAULT_CONFIGURATION, configuration
 from swir_tracker_ros.core import fhog
-from swir_tracker_ros.core.base import BaseFilter, Detection
+from swir_tracker_ros.core.base import Detection
 from swir_tracker_ros.core.conditioning import FrameConditioner
 from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.errors import KalmanError, TrackerError
-from swir_tracker_ros.policies.coast import CoastModel
-from swir_tracker_ros.policies.lookalike import LookalikeGuard
-from swir_tracker_ros.policies.memory import AppearanceMemory
-from swir_tracker_ros.policies.motion import MotionFilter
-from swir_tracker_ros.policies.occlusion import OcclusionVerdict
-from swir_tracker_ros.policies.redetection import Redetection
-from swir_tracker_ros.policies.rejected import RejectedFrames
-from swir_tracker_ros.policies.scale_search import ScaleSearch
-from swir_tracker_ros.policies.sweep import LongLossSweep
-from swir_tracker_ros.policies.trail import Trail
-from swir_tracker_ros.policies.update_gate import UpdateGate
+from swir_tracker_ros.track import Frame, Track
 from swir_tracker_ros.tracker_params import TrackerParams
 from swir_tracker_ros.types import Box, SearchMode, TrackResult, TrackState
 
@@ -43,40 +33,6 @@ def _as_box(box: object) -> Box:
     except (TypeError, ValueError) as exc:
         raise TrackerError(f"init box must be a Box or (x, y, w, h), got {box!r}") from exc
     return Box(x, y, w, h)
-
-
-class _Track:
-    """The per-track state: the base filter and the policies of one target (built by `Tracker.init`)."""
-
-    def __init__(self, p: TrackerParams, base: BaseFilter, box: Box, frame_shape: tuple[int, ...]) -> None:
-        self.base = base
-        self.frame_shape = frame_shape
-        self.init_size = (box.w, box.h)
-        self.box = box  # the current estimate, conditioned-image pixels
-        self.trail = Trail(p.trail_frames)
-        self.trail.remember_size(box)
-        self.verdict = OcclusionVerdict(p.occlusion, base.failed, base.psr_reacquisition)
-        self.gate = UpdateGate(p.update)
-        self.scales = ScaleSearch(p.scale)
-        self.redetection = Redetection(p.redetection)
-        self.coast = CoastModel(p.coast)
-        remembers = p.memory is not None and p.memory.ratio > 0
-        self.memory = AppearanceMemory(p.memory, base) if remembers else None
-        self.motion = MotionFilter(p.motion, base, box) if p.motion is not None else None
-        wraps = base.window_policies  # the guard and the sweep test other windows with the failure test
-        self.lookalike = (LookalikeGuard(p.lookalike, self.trail)
-                          if p.lookalike is not None and p.lookalike.frames > 0 and wraps else None)
-        self.sweep = (LongLossSweep(p.sweep, p.redetection)
-                      if p.sweep is not None and p.sweep.after > 0 and self.redetection.lattice and wraps
-                      else None)
-        self.rejected = RejectedFrames(p.rejected) if p.rejected is not None else None
-
-    def clamp_size(self, box: Box) -> Box:
-        """Keep the size within [1/4, 4] x the initial size so one bad scale step cannot run away."""
-        w0, h0 = self.init_size
-        w = min(max(box.w, 0.25 * w0), 4.0 * w0)
-        h = min(max(box.h, 0.25 * h0), 4.0 * h0)
-        return Box.from_center(box.cx, box.cy, w, h)
 
 
 class Tracker:
@@ -113,7 +69,7 @@ class Tracker:
         """Forget the target (state idle)."""
         self._state = TrackState.IDLE
         self._conditioner.reset()
-        self._track: _Track | None = None
+        self._track: Track | None = None
         self._sigma = 0.0  # `presmooth` blur of the conditioned frames, pixels
 
     def init(self, frame: np.ndarray, box: Box | tuple, bit_depth: int | None = None) -> None:
@@ -139,7 +95,7 @@ class Tracker:
         img = self._smoothed(img)
         base = make_filter(p.base, b.w, b.h)  # the configuration's base filter, selected once
         base.initialise(img, b)
-        self._track = _Track(p, base, b, frame.shape)
+        self._track = Track(p, base, b, frame.shape)
         self._state = TrackState.TRACKING
 
     def update(
@@ -187,7 +143,7 @@ class Tracker:
         return SmoothedFrame(img, self._sigma) if self._sigma > 0.0 else img
 
     # ------------------------------------------------------------------ per-frame steps
-    def _step_cf(self, t: _Track, img: np.ndarray) -> TrackResult:
+    def _step_cf(self, t: Track, img: np.ndarray) -> TrackResult:
         """Bare correlation filter: one window at the last position, fixed size, update every frame."""
         base, box = t.base, t.box
         win = search_window(box.cx, box.cy, box.w, box.h, base.padding)
@@ -196,106 +152,158 @@ class Tracker:
         base.train(img, t.box, base.learning_rate)
         return self._result(t.box, TrackState.TRACKING, det=det, measured=True, updated=True, windows=(win,))
 
-    def _step(self, t: _Track, img: np.ndarray, dx: float, dy: float, frames: float) -> TrackResult:
-        base, motion, verdict = t.base, t.motion, t.verdict
+    def _step(self, t: Track, img: np.ndarray, dx: float, dy: float, frames: float) -> TrackResult:
+        """One frame, stage by stage (docs/tracking_core.md "Per-frame loop")."""
+        pred = self._predict(t, img, dx, dy, frames)
+        if pred is None:
+            return self._result(t.box, TrackState.LOST)
+        f = self._search_scales(t, img, pred)
+        f.failed = t.verdict.failed(f.det)
+        self._guard_lookalike(t, f)
+        self._redetect(t, f)
+        self._reacquire(t, f)
+        self._sweep(t, f)
+        self._update_motion(t, f)
+        self._update_model(t, f)
+        return self._finish(t, f)
+
+    def _predict(self, t: Track, img: np.ndarray, dx: float, dy: float, frames: float) -> Box | None:
+        """1. The Kalman prediction over `frames` periods plus the ego shift; None: it left the image and
+        the track is lost (the sweep holds it at the border while re-detecting)."""
+        motion = t.motion
         assert motion is not None
         pred = motion.predict(frames, dx, dy)
         t.trail.advance(frames, dx, dy)
         ih, iw = img.shape
         if not pred.is_valid() or not pred.intersects_image(iw, ih):
-            # (sweep) a prediction that left the image while re-detecting is held at its border
-            if not (pred.is_valid() and t.sweep is not None and verdict.occluded > 0):
+            if not (pred.is_valid() and t.sweep is not None and t.verdict.occluded > 0):
                 self._state = TrackState.LOST
                 t.box = pred if pred.is_finite() else t.box
-                return self._result(t.box, TrackState.LOST)
+                return None
             motion.hold_in(iw, ih)
             pred = motion.box()
-        pred = t.clamp_size(pred)
-        scales = t.scales.search(base, img, pred, verdict)
-        det, best, window = scales.dets[scales.best], scales.best, scales.wins[scales.mid]
-        failed = verdict.failed(det)
-        takeback = None
-        if not failed and verdict.occluded == 0 and t.lookalike is not None:
-            takeback = t.lookalike.check(base, img, det, pred, scales.wins, scales.factors, verdict)
-            if takeback is not None:
-                best = takeback.best
-                det = takeback.dets[best]
-        failed = failed or verdict.rescan(det)
-        mode = SearchMode.NORMAL
-        shown: tuple[Box, ...] = (window,) if takeback is None else (window, takeback.window)
-        if failed:
-            mode = SearchMode.MULTI_WINDOW
-            t.coast.redetecting(motion, verdict.occluded)
-            found = t.redetection.search(base, img, pred, scales, verdict.occluded)
-            det, shown = found.det, found.windows
-        if not failed and verdict.weak(det.peak, t.coast.p.size_hold_peak_ratio):
+        return t.clamp_size(pred)
+
+    @staticmethod
+    def _search_scales(t: Track, img: np.ndarray, pred: Box) -> Frame:
+        """2. The scale search at the prediction (3. the failure test follows on its pick)."""
+        scales = t.scales.search(t.base, img, pred, t.verdict)
+        window = scales.wins[scales.mid]
+        return Frame(img, pred, scales, scales.dets[scales.best], scales.best, window, (window,))
+
+    @staticmethod
+    def _guard_lookalike(t: Track, f: Frame) -> None:
+        """4. A tracked frame whose peak left the trail's motion: the window at the motion reference may
+        take the box back."""
+        if f.failed or t.verdict.occluded > 0 or t.lookalike is None:
+            return
+        scales = f.scales
+        f.takeback = t.lookalike.check(t.base, f.img, f.det, f.pred, scales.wins, scales.factors, t.verdict)
+        if f.takeback is not None:
+            f.best = f.takeback.best
+            f.det = f.takeback.dets[f.best]
+            f.shown = (f.window, f.takeback.window)
+
+    @staticmethod
+    def _redetect(t: Track, f: Frame) -> None:
+        """5. A failed frame searches around the prediction; (ours) a weak tracked frame holds the size."""
+        motion = t.motion
+        assert motion is not None
+        if f.failed:
+            f.mode = SearchMode.MULTI_WINDOW
+            t.coast.redetecting(motion, t.verdict.occluded)
+            found = t.redetection.search(t.base, f.img, f.pred, f.scales, t.verdict.occluded)
+            f.det, f.shown = found.det, found.windows
+        elif t.verdict.weak(f.det.peak, t.coast.p.size_hold_peak_ratio):
             motion.hold_size()  # (ours) a weak frame's size is measured, not extrapolated
-        rejected, learn, weak = False, False, False
-        scale = det.scale
-        if not failed:
-            # (ours) back from an occlusion takes a peak like the tracked target's, and the memory's word
-            weak = rejected = verdict.rejects(det)
-            if not rejected and t.memory is not None:
-                rejected, learn = t.memory.verdict(best)
-            if rejected and t.rejected is not None:
-                scale = t.rejected.scale(pred, det.scale, t.trail)
-                if scale != det.scale:
-                    motion.hold_size()
-        grid_sizes = self.params.redetection.grid_scale_search
-        size = (pred.w * scale, pred.h * scale) if not failed or grid_sizes else (pred.w, pred.h)
-        k = motion.threshold(det.peak)
+
+    @staticmethod
+    def _reacquire(t: Track, f: Frame) -> None:
+        """6. (ours) A non-failed frame must look like the tracked target (after an occlusion) and be known
+        to the memory, else it is rejected; a rejected frame's size is one of the recent tracked ones."""
+        f.scale = f.det.scale
+        if f.failed:
+            return
+        f.weak = f.rejected = t.verdict.rejects(f.det)
+        if not f.rejected and t.memory is not None:
+            f.rejected, f.learn = t.memory.verdict(f.best)
+        if f.rejected and t.rejected is not None:
+            f.scale = t.rejected.scale(f.pred, f.det.scale, t.trail)
+            if f.scale != f.det.scale and t.motion is not None:
+                t.motion.hold_size()
+
+    @staticmethod
+    def _sweep(t: Track, f: Frame) -> None:
+        """7. (ours) A failed or rejected frame after a long loss searches one tile of the whole image; a
+        find makes the state jump there."""
+        if not (f.failed or f.rejected) or t.sweep is None:
+            return
+        f.jump = t.sweep.search(t.base, f.img, f.pred, f.window, f.det, t.verdict, t.memory, t.scales)
+        if f.jump is not None:
+            f.det, f.mode, f.shown = f.jump.det, SearchMode.MULTI_WINDOW, (*f.shown, f.jump.window)
+
+    def _update_motion(self, t: Track, f: Frame) -> None:
+        """8. The Kalman update: robust with k from the peak on a tracked frame, the motion held while
+        re-detecting (and on a held rejected frame), a restart at the sweep's find; adaptive R."""
+        motion, verdict, det, pred = t.motion, t.verdict, f.det, f.pred
+        assert motion is not None
+        if f.jump is not None:
+            size = f.jump.size
+        elif not f.failed or self.params.redetection.grid_scale_search:
+            size = (pred.w * f.scale, pred.h * f.scale)
+        else:
+            size = (pred.w, pred.h)
+        k = f.threshold = motion.threshold(det.peak)
         z = motion.measurement(det.cx, det.cy, *size)
-        jump = None
-        if (failed or rejected) and t.sweep is not None:
-            jump = t.sweep.search(base, img, pred, window, det, verdict, t.memory, t.scales)
-        if jump is not None:  # (ours) the sweep found the target away from the prediction: start there
-            det, mode, shown = jump.det, SearchMode.MULTI_WINDOW, (*shown, jump.window)
-            k = motion.threshold(det.peak)
-            z = motion.measurement(det.cx, det.cy, *jump.size)
+        if f.jump is not None:  # (ours) the sweep found the target away from the prediction: start there
             info = motion.jump(z, k)
-        elif failed:  # the winner may still be a window at the prediction (the normal-mode search)
-            outer = not any(det is d for d in scales.dets)
+        elif f.failed:  # the winner may still be a window at the prediction (the normal-mode search)
+            outer = not any(det is d for d in f.scales.dets)
             info = motion.redetection_update(z, k, det.peak, outer, outer and verdict.weak(det.peak))
-        elif rejected and t.rejected is not None and t.rejected.held(verdict.occluded, weak, best, t.memory):
+        elif f.rejected and t.rejected is not None and t.rejected.held(verdict.occluded, f.weak, f.best,
+                                                                         t.memory):
             # (ours) a frame that is not `tracking` does not steer the state like a confident one
             info = motion.redetection_update(z, k, det.peak, False, False)
         else:
             info = motion.update(z, k)
-        if takeback is not None and not rejected:
+        if f.takeback is not None and not f.rejected and t.lookalike is not None:
             t.lookalike.taken_back()
-            motion.set_velocity(*takeback.velocity)
+            motion.set_velocity(*f.takeback.velocity)
         motion.adapt_noise(z, info)
         t.box = t.clamp_size(motion.posterior())
-        if learn:
-            t.memory.learn(img, t.box)
-        rate = t.gate.rate(base, det, failed or rejected)
-        if rate is not None:
-            base.train(img, t.box, rate)
-        if failed or rejected:
-            if verdict.occluded == 0:
-                t.coast.start(motion, t.trail)
-            state = verdict.missed()
+
+    @staticmethod
+    def _update_model(t: Track, f: Frame) -> None:
+        """9. The memory learns on the frames it verified above its mean; the base filter on the frames
+        its gate passes (UpdateGate)."""
+        if f.learn and t.memory is not None:
+            t.memory.learn(f.img, t.box)
+        f.rate = t.gate.rate(t.base, f.det, f.failed or f.rejected)
+        if f.rate is not None:
+            t.base.train(f.img, t.box, f.rate)
+
+    def _finish(self, t: Track, f: Frame) -> TrackResult:
+        """10. The state: `tracking`, or `occluded` (`lost` after `occlusion.max_frames`); the coast model
+        starts on the first missed frame, the trail records the tracked ones."""
+        if f.failed or f.rejected:
+            if t.verdict.occluded == 0 and t.motion is not None:
+                t.coast.start(t.motion, t.trail)
+            state = t.verdict.missed()
         else:
-            verdict.tracked(det.peak)
+            t.verdict.tracked(f.det.peak)
             if t.sweep is not None:
                 t.sweep.restart()  # the next loss sweeps from its own prediction outwards
             t.trail.remember(t.box)
             state = TrackState.TRACKING
         self._state = state
-        return self._result(t.box, state, det=det, mode=mode, measured=not failed, updated=rate is not None,
-                            windows=shown, threshold=k if k is not None else 0.0)
+        return self._result(t.box, state, det=f.det, mode=f.mode, measured=not f.failed,
+                            updated=f.rate is not None, windows=f.shown,
+                            threshold=f.threshold if f.threshold is not None else 0.0)
 
-    def _result(
-        self,
-        box: Box,
-        state: TrackState,
-        det: Detection | None = None,
-        mode: SearchMode = SearchMode.NORMAL,
-        measured: bool = False,
-        updated: bool = False,
-        windows: tuple[Box, ...] = (),
-        threshold: float = 0.0,
-    ) -> TrackResult:
+    def _result(self, box: Box, state: TrackState, det: Detection | None = None,
+                mode: SearchMode = SearchMode.NORMAL, measured: bool = False, updated: bool = False,
+                windows: tuple[Box, ...] = (), threshold: float = 0.0) -> TrackResult:
+        """A frame's TrackResult in input pixels (the track's box `box`, its velocity, the frame's `det`)."""
         inv = 1.0 / self.params.conditioning.downscale
 
         def up(b: Box) -> Box:

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from swir_tracker_ros.core.base import FilterParams
 from swir_tracker_ros.core.conditioning import ConditioningConfig
 from swir_tracker_ros.core.kcf import KCFParams
+from swir_tracker_ros.core.registry import filter_class
+from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import nested, param, validate_params
 from swir_tracker_ros.policies.coast import CoastParams
 from swir_tracker_ros.policies.lookalike import LookalikeParams
@@ -67,12 +69,31 @@ class TrackerParams:
         "(ours) Gaussian blur of the conditioned frame before any window is sampled, sigma = this x "
         "sqrt(w h) of the start box (0.02: 0.8-1.3 px for 25x72-40x100 px targets): windows sampled at "
         "sub-pixel positions are smoothed unequally by the bilinear interpolation, so two start boxes a "
-        "pixel apart learn differently smoothed templates (docs/experiments.md, thirteenth pass); 0: off "
-        "(the papers)",
+        "pixel apart learn differently smoothed templates; 0: off (the papers)",
         0.0,
         0.2,
     )
 
     def validate(self) -> None:
-        """Raise ParameterError naming the first parameter of the wrong type or out of range."""
+        """Raise ParameterError naming the first parameter of the wrong type or out of range, or a
+        combination of policies in which one would do nothing (`check`)."""
         validate_params(self)
+
+    def check(self) -> None:
+        """A policy is in the tracker (its Params) or out (None), never in and idle: refuse a combination
+        in which one would do nothing (run by `validate_params` after the fields)."""
+        if self.motion is None:  # the bare correlation filter: one window, no long-term policy
+            idle = [n for n in ("memory", "lookalike", "sweep", "rejected") if getattr(self, n) is not None]
+            if idle:
+                raise ParameterError(f"parameters {', '.join(idle)}: the bare correlation filter (motion: "
+                                     "None) runs none of them; set them to None")
+        base = filter_class(self.base)
+        if not base.window_policies:  # BaseFilter.window_policies: what the guard and the sweep may wrap
+            idle = [n for n in ("lookalike", "sweep") if getattr(self, n) is not None]
+            if idle:
+                raise ParameterError(f"parameters {', '.join(idle)}: the look-alike guard and the long-loss "
+                                     f"sweep do not wrap base filter {base.name} (window_policies); set "
+                                     "them to None")
+        if self.sweep is not None and self.redetection.lattice_step <= 0.0:
+            raise ParameterError("parameter sweep: the long-loss sweep searches the re-detection lattice, "
+                                 "off with redetection.lattice_step 0; set sweep to None")

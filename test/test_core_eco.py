@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.eco import fourier as fo
+import swir_tracker_ros.core.eco.fourier as fo
 from swir_tracker_ros.core.eco.localise import localise
 from swir_tracker_ros.core.eco.regularisation import RegOperator, reg_window_spectrum, squared_kernel
 from swir_tracker_ros.core.eco.sample_space import SampleSpace
@@ -135,11 +135,3 @@ def test_compiled_intensity_channels_equal_the_core_ones() -> None:
         out = block_features(patches, BlockSpec("intensity", 4, 3, bins))
         assert np.allclose(out, intensity_channels(patches, 4, bins), atol=1e-6)
 
-
-def test_vertex_offset_of_a_parabola() -> None:
-    from swir_tracker_ros.core.eco.localise import vertex_offset
-
-    f = lambda x: 1.0 - (x - 0.3) ** 2  # noqa: E731
-    assert vertex_offset(f(-1), f(0), f(1)) == pytest.approx(0.3)
-    assert vertex_offset(1.0, 0.5, 1.0) == 0.0  # not a maximum
-    assert vertex_offset(0.0, 1.0, 0.99) <= 0.5

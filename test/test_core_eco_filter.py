@@ -11,8 +11,10 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.eco import ECOFilter, ECOParams, ECOTracker
-from swir_tracker_ros.core.eco import optimise as opt
+import swir_tracker_ros.core.eco.optimise as opt
+from swir_tracker_ros.core.eco.filter import ECOFilter
+from swir_tracker_ros.core.eco.params import ECOParams
+from swir_tracker_ros.core.eco.tracker import ECOTracker
 from swir_tracker_ros.types import Box
 
 

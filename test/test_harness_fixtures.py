@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 
 from swir_tracker_ros.harness import cli
-from swir_tracker_ros.harness.bagio import BagReader, bag_info
+from swir_tracker_ros.harness.bagio import bag_info
+from swir_tracker_ros.harness.bagreader import BagReader
 
 # Per-topic counts stated in each fixture's metadata.yaml (wbag: summed over its five split files).
 EXPECTED = {

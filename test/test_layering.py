@@ -13,7 +13,8 @@ from conftest import REPO
 
 PKG = REPO / "swir_tracker_ros"
 BASE = {"types", "errors", "topics", "paramfield"}
-PRODUCT = {"kalman", "core", "policies", "tracker_params", "configs", "tracker", "acquisition", "pelco"}
+PRODUCT = {"kalman", "core", "policies", "tracker_params", "configs", "track", "tracker", "acquisition",
+           "pelco"}
 # Each layer and the layers it may import (docs/interfaces.md). Base modules import nothing above them.
 ALLOWED: dict[str, set[str]] = {
     "types": set(),
@@ -25,7 +26,8 @@ ALLOWED: dict[str, set[str]] = {
     "policies": BASE | {"kalman", "core"},  # the long-term mechanisms around a base filter
     "tracker_params": BASE | {"core", "policies"},
     "configs": BASE | {"core", "policies", "tracker_params"},  # named configurations
-    "tracker": BASE | {"kalman", "core", "policies", "tracker_params", "configs"},
+    "track": BASE | {"kalman", "core", "policies", "tracker_params"},  # the per-track state of `tracker`
+    "tracker": BASE | {"kalman", "core", "policies", "tracker_params", "configs", "track"},
     "acquisition": BASE | {"kalman"},
     "pelco": BASE,
     "scene": BASE | {"acquisition"},  # scene.crowd hands out acquisition Detections (simulation -> core)

@@ -272,8 +272,8 @@ def test_a_gate_that_nothing_passes_freezes_the_model_unless_unconfident_frames_
     the skater is lost (measured: 9 updates, AUC 0.232). With `unconfident_rate` 0.2 (the default), once the
     gate has refused `unconfident_after` (10) tracked frames, a refused tracked frame still teaches the filter
     at a fifth of its rate and the skater is kept (measured: AUC 0.589). Pinned to `size_rate_peak_ratio` 0,
-    `redetect_psr` 0 and `sweep_after` 0, the setting of that measurement (with the ninth pass's PSR bar the
-    frozen filter scores 0.362, with the long-loss sweep 0.628: the skater is re-acquired later, by other
+    `redetect_psr` 0 and no long-loss sweep, the setting of that measurement (with the ninth pass's PSR bar
+    the frozen filter scores 0.362, with the long-loss sweep 0.628: the skater is re-acquired later, by other
     paths)."""
     src = open_source(sequences_dir / "otb_skating1")
 

@@ -29,7 +29,7 @@ FPS = 25.0
 
 def papers_redetection() -> TrackerParams:
     """The default with the papers' re-detection: the 3x3 grid (no lattice, so no sweep), no peak rule."""
-    p = TrackerParams()
+    p = TrackerParams(sweep=None)
     p.redetection.lattice_step, p.occlusion.reacquire_peak_ratio = 0.0, 0.0
     return p
 
@@ -97,17 +97,16 @@ def test_a_lookalike_crossing_in_front_does_not_take_the_box(seed: int) -> None:
     4,5,6,7` 3 of 4 runs failed so). The look-alike guard correlates a window where the motion before the
     crossing puts the target once the box has left it by half a box, and the target's peak there (0.58-0.61
     against the crosser's 0.51-0.54, PSR 15-16) takes the box back (measured: on the target from ~5.3 s)."""
-    def run(frames: int) -> list:
-        p = TrackerParams()
-        p.lookalike.frames = frames
+    def run(guard: bool) -> list:
+        p = TrackerParams() if guard else TrackerParams(lookalike=None)
         return demo_follow(seed, 0, 165, p, "demo_crossing", CROSSER_ID)
 
     def on(box: Box, other: Box | None) -> bool:
         return other is not None and box.iou(other) > 0.5
 
-    off = run(0)
+    off = run(False)
     assert all(on(r.box, c) and r.state is TrackState.TRACKING for _, r, _, c in off[-30:])
-    guarded = run(TrackerParams().lookalike.frames)
+    guarded = run(True)
     assert all(r.box.iou(gt) > 0.5 and r.state is TrackState.TRACKING for _, r, gt, _ in guarded[-30:])
     assert not any(r.state is TrackState.TRACKING and r.box.iou(gt) == 0.0 for _, r, gt, _ in guarded)
 
@@ -246,10 +245,9 @@ def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
     assert all(psr >= 12.0 for psr in on), on
 
 
-def sweep_stats(name: str, start: str, sweep_after: int) -> tuple[RunStats, list[TrackState]]:
+def sweep_stats(name: str, start: str, sweep: bool) -> tuple[RunStats, list[TrackState]]:
     src = open_source(f"synth:{name}")
-    p = TrackerParams()
-    p.sweep.after = sweep_after
+    p = TrackerParams() if sweep else TrackerParams(sweep=None)
     factory = lambda: Tracker(p)  # noqa: E731
     run = run_starts(src, factory, starts=(start,))[start]
     return RunStats.of(run, src.fps), run.states
@@ -262,8 +260,8 @@ def test_the_sweep_finds_a_target_that_turned_back_while_hidden() -> None:
     (`sweep_after` 25, the default) a tile finds him walking back, the window centred there passes the
     re-acquisition bars and the memory, and he is `tracking` again within a second of reappearing; no
     `tracking` frame off him on the way."""
-    off, off_states = sweep_stats("t2_partial_full_turn_back", "left", 0)
-    on, on_states = sweep_stats("t2_partial_full_turn_back", "left", 25)
+    off, off_states = sweep_stats("t2_partial_full_turn_back", "left", False)
+    on, on_states = sweep_stats("t2_partial_full_turn_back", "left", True)
     assert off.occlusions == on.occlusions == 1
     assert (off.survived, on.survived) == (0, 1), (off, on)
     assert TrackState.LOST in off_states and TrackState.LOST not in on_states
@@ -276,8 +274,8 @@ def test_the_sweep_finds_the_walker_the_occluders_edge_held_the_box_from() -> No
     after he walks on. The sweep's tiles also run on such rejected frames; his window, correlated at the
     re-detection's sizes (the box had grown to ~1.4x while held), passes the bars: re-acquired, no
     false-tracking frame (measured: AUC 0.32 -> 0.63)."""
-    off, _ = sweep_stats("x_low_contrast_interlaced", "top_left", 0)
-    on, _ = sweep_stats("x_low_contrast_interlaced", "top_left", 25)
+    off, _ = sweep_stats("x_low_contrast_interlaced", "top_left", False)
+    on, _ = sweep_stats("x_low_contrast_interlaced", "top_left", True)
     assert (off.survived, on.survived) == (0, 1), (off, on)
     assert on.false_tracking == 0 and on.success_auc > off.success_auc + 0.15, (off, on)
 

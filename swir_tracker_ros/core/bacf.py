@@ -58,9 +58,8 @@ class BACFParams(KCFParams):
     )
     feature: str = _f(
         "hog_soft",
-        "filter features (choices as kcf.feature): soft FHOG, what BACF was measured with here "
-        "(docs/experiments.md); hog_gray is the BACF paper's HOG + grayscale (with it the pipeline test "
-        "on OTB crossing went `occluded` at frame 30: not tuned for it)",
+        "filter features (choices as kcf.feature): soft FHOG, what BACF was measured with here; hog_gray "
+        "is the BACF paper's HOG + grayscale, not tuned for it here",
         choices=KCFParams.__dataclass_fields__["feature"].metadata["choices"],
     )
     lambda_: float = _f(0.01, "lambda of eq. 2, weight of ||h||^2 (BACF: 0.01)", 1e-8, 10.0)
@@ -70,9 +69,9 @@ class BACFParams(KCFParams):
     )
     window_shape: str = _f(
         "proportional",
-        "proportional: (1 + padding) x the target's width and height, as kcf (better here under SRE: "
-        "docs/experiments.md); square: a square of the same area, side (1 + padding) sqrt(w h) (BACF "
-        "reference: search_area_shape square)",
+        "proportional: (1 + padding) x the target's width and height, as kcf (better here from shifted "
+        "starts); square: a square of the same area, side (1 + padding) sqrt(w h) (BACF reference: "
+        "search_area_shape square)",
         choices=("square", "proportional"),
     )
     max_window_cells: int = _f(

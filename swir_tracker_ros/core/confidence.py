@@ -29,6 +29,10 @@ def subpixel_offset(left: float, centre: float, right: float) -> float:
     return -0.5 if v < -0.5 else 0.5 if v > 0.5 else v  # np.clip's result (NaN stays NaN), less overhead
 
 
+PSR_FAILURE = 7.0
+"""Paper 000 eq. 10's failure threshold: a response whose PSR is below it is a failure (occlusion)."""
+
+
 def psr(response: np.ndarray, row: int, col: int, exclusion: int = 10) -> float:
     """Peak-to-sidelobe ratio (paper 000 eq. 10): (g_max - mu_sl) / sigma_sl.
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swir_tracker_ros.core.confidence import PSR_FAILURE
 from swir_tracker_ros.core.features import FEATURE_KINDS
 from swir_tracker_ros.core.fft import gaussian_label_spectrum, irfft2, rfft2
 from swir_tracker_ros.core.kernels import corr_jit
@@ -33,13 +34,13 @@ class KCFParams(ScaleOptions):
         "hog_gray",
         "filter features: 31-channel FHOG (cell 4) with soft orientation bins as in Piotr's fhog "
         "(hog_soft: paper 000), with hard nearest bins (hog), soft FHOG plus the cell-mean intensity "
-        "(hog_gray, ours: real-set SRE AUC 0.460 -> 0.535, docs/experiments.md) or plus an 8-bin "
+        "(hog_gray, ours: the intensity a thermal or SWIR target differs most in) or plus an 8-bin "
         "intensity histogram (hog_ih), or raw gray (cell 1)",
         choices=FEATURE_KINDS,
     )
     cell_size: int = _f(4, "FHOG cell size in pixels (gray features always use 1)", 1, 8)
     psr_threshold: float = _f(
-        7.0, "failure detection: PSR below this switches to 9 windows (paper 000)", 0.0, 100.0
+        PSR_FAILURE, "failure detection: PSR below this switches to 9 windows (paper 000 eq. 10)", 0.0, 100.0
     )
     update_peak_threshold: float = _f(
         0.5, "update gate `peak`: model updated only when the peak exceeds this (paper 000)", 0.0, 2.0

@@ -23,10 +23,15 @@ def filter_params(name: str) -> FilterParams:
         raise ParameterError(f"unknown base filter {name!r}; known: {', '.join(BASE_FILTERS)}") from None
 
 
-def make_filter(fp: FilterParams, w: float, h: float) -> BaseFilter:
-    """The base filter whose Params `fp` is, for a first box of size w x h (ParameterError if none)."""
+def filter_class(fp: FilterParams) -> type[BaseFilter]:
+    """The base filter class whose Params `fp` is (ParameterError if none)."""
     for cls in BASE_FILTERS.values():
         if type(fp) is cls.Params:
-            return cls(fp, w, h)
+            return cls
     known = ", ".join(cls.Params.__name__ for cls in BASE_FILTERS.values())
     raise ParameterError(f"no base filter takes {type(fp).__name__} (known: {known})")
+
+
+def make_filter(fp: FilterParams, w: float, h: float) -> BaseFilter:
+    """The base filter whose Params `fp` is, for a first box of size w x h (ParameterError if none)."""
+    return filter_class(fp)(fp, w, h)

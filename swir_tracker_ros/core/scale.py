@@ -101,8 +101,8 @@ class ScaleOptions(FilterParams):
         "exact",
         "template cell counts: exact ((1 + padding) x target rounded to whole cells, the papers), or (ours, "
         "an option) smooth7 / smooth5: each moved to the nearest 7- / 5-smooth number, fast FFT sizes (the "
-        "window in the image is unchanged, resampled a few per cent finer or coarser); not the default: "
-        "more false-tracking frames under SRE (docs/experiments.md)",
+        "window in the image is unchanged, resampled a few per cent finer or coarser); not the default: the "
+        "resampled window tracks worse from shifted starts",
         choices=FFT_SIZES,
     )
     large_target_halving: float = _f(

@@ -20,9 +20,8 @@ from swir_tracker_ros.harness.peers import PeerDirectory
 from swir_tracker_ros.harness.protocol import Results, RunStats
 from swir_tracker_ros.harness.runner import frame_size, kind_of
 from swir_tracker_ros.harness.sources import open_source, read_gt, source_fingerprint
-from swir_tracker_ros.harness.store import RunRecord, RunStore, Truth, identity
+from swir_tracker_ros.harness.store import REPO, RunRecord, RunStore, Truth, identity
 
-REPO = Path(__file__).resolve().parents[2]
 DEFAULT_SEQUENCES = REPO.parent / "shared" / "data" / "sequences"
 DEFAULT_PEERS = REPO.parent / "shared" / "peers"
 _MAKERS = ("tracker", "configuration", "overrides", "code", "numerics")  # what may not differ in one label

@@ -18,9 +18,9 @@ from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.bench_worker import WORKER_VERSION
 from swir_tracker_ros.harness.evaluate import OPE, Run
 from swir_tracker_ros.harness.sources import Source
+from swir_tracker_ros.harness.store import REPO
 from swir_tracker_ros.types import Box
 
-REPO = Path(__file__).resolve().parents[2]
 BENCH = REPO / ".venv-bench"
 OPENCV_TRACKERS = ("KCF", "CSRT", "MOSSE")
 PEER_PREFIX = "opencv_"

@@ -16,13 +16,13 @@ from swir_tracker_ros.configs import CONFIGURATIONS, DEFAULT_CONFIGURATION, conf
 from swir_tracker_ros.errors import HarnessError, ParameterError, SwirTrackerError
 from swir_tracker_ros.harness.metrics import sre_box
 from swir_tracker_ros.harness.sources import Source
+from swir_tracker_ros.harness.store import OPE
 from swir_tracker_ros.tracker import Tracker
 from swir_tracker_ros.tracker_params import TrackerParams
 from swir_tracker_ros.types import Box, TrackResult
 
 DEFAULT = "default"  # the configuration name that stands for the tracker's default configuration
 BASE_KEYS = ("pipeline", "base_filter")  # override keys that choose the configuration's base filter
-OPE = "none"  # the start of the one-pass run: the ground-truth box itself
 
 
 class TrackerLike(Protocol):

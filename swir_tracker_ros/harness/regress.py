@@ -18,9 +18,8 @@ from swir_tracker_ros.harness.numerics import describe, run_in
 from swir_tracker_ros.harness.protocol import Results
 from swir_tracker_ros.harness.runner import Player, play
 from swir_tracker_ros.harness.sources import Source, open_source
-from swir_tracker_ros.harness.store import RunStore, code_hash, git_commit, numerics
+from swir_tracker_ros.harness.store import REPO, RunStore, code_hash, git_commit, numerics
 
-REPO = Path(__file__).resolve().parents[2]
 REGRESSION_DIR = REPO / "test" / "regression"
 
 

@@ -20,7 +20,8 @@ from msg_adapters.qos import profile
 from msg_adapters.stamps import clock_msg, msg_ns, ns_to_stamp
 from swir_tracker_ros import topics
 from swir_tracker_ros.errors import HarnessError
-from swir_tracker_ros.harness.bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC, BagReader
+from swir_tracker_ros.harness.bagio import GT_TOPIC, IMAGE_TOPIC, INFO_TOPIC, OCCLUDED_TOPIC
+from swir_tracker_ros.harness.bagreader import BagReader
 from swir_tracker_ros.harness.evaluate import Run
 from swir_tracker_ros.harness.protocol import RunStats
 from swir_tracker_ros.types import Box

@@ -30,9 +30,9 @@ from swir_tracker_ros.harness.metrics import SRE_STYLES
 from swir_tracker_ros.types import Box
 
 FORMAT = 1
-OPE = "none"  # start key of the one-pass run (file name ope.json)
+OPE = "none"  # the start of the one-pass run, the ground-truth box itself (its stored file: ope.json)
 PACKAGE = Path(__file__).resolve().parents[1]
-REPO = PACKAGE.parent
+REPO = PACKAGE.parent  # the repository (a source checkout) the package is in
 # Provenance fields that must agree for a stored run to stand for a new one (the others are information).
 IDENTITY = ("tracker", "configuration", "overrides", "code", "numerics", "fingerprint", "style")
 # Environment variables that change floating-point results (kernel choice); part of `numerics()`.

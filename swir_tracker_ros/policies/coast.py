@@ -41,8 +41,8 @@ class CoastParams:
         0.6,
         "(ours) a tracked frame whose peak is below this ratio of the tracked peaks' mean zeroes the size "
         "velocity before its Kalman update: the sizes of weak, changing responses (a target that turns) "
-        "are measured but not extrapolated, so the box no longer shrinks away frame after frame (VOT-TIR "
-        "horse, OTB girl: docs/experiments.md, ninth pass); 0: off (the papers)",
+        "are measured but not extrapolated, so the box does not shrink away frame after frame; 0: off (the "
+        "papers)",
         0.0,
         2.0,
     )

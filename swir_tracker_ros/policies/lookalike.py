@@ -27,8 +27,8 @@ class LookalikeParams:
         "(ours) a tracked peak further than `distance` from where the trail's motion before its last this "
         "many frames puts the target (ego shifts removed) also has a window correlated there; a peak in "
         "that window, near that reference and apart from the first, of at least `ratio` x the first peak "
-        "is the target, and the frames since the reference are dropped from the trail; 0: off",
-        0,
+        "is the target, and the frames since the reference are dropped from the trail",
+        1,
         1000,
     )
     distance: float = param(

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swir_tracker_ros.core.base import BaseFilter
+from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param
 from swir_tracker_ros.types import Box
 
@@ -27,6 +28,12 @@ class MemoryParams:
     rate: float = param(
         0.01, "(ours) learning rate of the memory on frames whose memory peak is above its mean", 0.0, 1.0
     )
+
+    def check(self) -> None:
+        """A memory that rejects no frame is no policy: it is switched off by leaving it out (None)."""
+        if self.ratio <= 0.0:
+            raise ParameterError(f"parameter ratio = {self.ratio} rejects no frame; leave the memory out "
+                                 "(memory: None) to switch it off")
 
 
 class AppearanceMemory:

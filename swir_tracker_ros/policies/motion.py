@@ -50,20 +50,13 @@ class MotionParams:
         True,
         "(ours) a confident (tracked) frame's centre is the correlation peak itself, not the Kalman "
         "posterior: the clipped robust update (eq. 33-35 with eq. 38's k = 0.1-0.4 at the low peaks of a "
-        "changing target) lags fast true motion until the window loses the target (OTB surfer, skating1)",
+        "changing target) lags fast true motion until the window loses the target",
     )
     size_velocity: bool = param(
         True,
         "the box model's size velocity is estimated and extrapolated (the papers); false (ours): held at "
         "zero after every update, the size smoothed but not extrapolated (its process noise is in pixels, so "
         "a small target's size velocity runs away from a few noisy measurements)",
-    )
-    peak_size: bool = param(
-        False,
-        "(ours) a tracked frame's size is the measurement itself and the size velocity zero: for a base "
-        "filter that estimates the size (ECO's fDSST), which the Kalman filter would only delay and "
-        "extrapolate (its size noise is in pixels: a first 7 % shrink of a 10 px drone's box drove the "
-        "prediction to a quarter of the size in 8 frames; docs/eco.md)",
     )
 
 
@@ -168,9 +161,7 @@ class MotionFilter:
         info = self.kf.update(z, threshold=k)
         if self.p.peak_centre:
             self.kf.x[:2] = z[:2]  # the confident correlation peak is the centre (no posterior lag)
-        if self.p.peak_size:
-            self.kf.x[2:4] = z[2:4]  # the base filter's own size estimate, not smoothed nor extrapolated
-        if self.p.peak_size or not self.p.size_velocity:
+        if not self.p.size_velocity:
             self.hold_size()
         return info
 

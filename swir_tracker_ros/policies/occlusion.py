@@ -28,17 +28,11 @@ class OcclusionParams:
         12.0,
         "(ours) re-acquisition also needs a PSR of at least this, a hysteresis over the failure test's PSR "
         "7: a first non-failed frame after an occlusion below it stays `occluded` (a static edge of the "
-        "occluder was taken back at PSR 7-12, its peak and memory score just over their bars: synthetic "
-        "x_low_contrast_interlaced; docs/experiments.md, ninth pass); base filters whose PSRs that bar "
-        "was measured on only (KCF: BACF's flatter responses keep PSRs near 7 on the target); 0: off",
+        "occluder gives PSRs of 7-12 with a peak and memory score just over their bars); only on base "
+        "filters whose PSRs it was measured on (`BaseFilter.psr_reacquisition`: BACF's flatter responses "
+        "keep PSRs near 7 on the target); 0: off",
         0.0,
         100.0,
-    )
-    rescan: bool = param(
-        False,
-        "(ours) while re-detecting, a non-failed but weak peak at the prediction (below "
-        "reacquire_peak_ratio x the tracked mean) keeps the re-detection search going instead of steering "
-        "the filter as a normal-mode measurement",
     )
     max_frames: int = param(250, "(ours) frames in re-detection before the state becomes lost", 1, 100000)
 
@@ -78,10 +72,6 @@ class OcclusionVerdict:
     def low_psr(self, psr: float) -> bool:
         """Is `psr` below the re-acquisition bar `reacquire_psr` (base filters with that bar only)?"""
         return self._psr_bar and self.p.reacquire_psr > 0.0 and psr < self.p.reacquire_psr
-
-    def rescan(self, det: Detection) -> bool:
-        """(`rescan`) Does a weak, non-failed peak while re-detecting keep the search going?"""
-        return self.p.rescan and self.occluded > 0 and self.weak(det.peak)
 
     def rejects(self, det: Detection) -> bool:
         """A non-failed frame after an occlusion is not the target back when its peak is weak or its PSR

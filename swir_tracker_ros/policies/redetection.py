@@ -53,8 +53,8 @@ class RedetectionParams:
         2,
         "(ours) the lattice's rings from this one outwards are searched as a checkerboard whose two halves "
         "alternate frame to frame (the windows inside it every frame): from ring 2 a 7x7 lattice correlates "
-        "28 windows a frame instead of 48, from ring 1 24 (which lost a synthetic occlusion); a far target "
-        "is found at most one frame later; 0: every window every frame",
+        "28 windows a frame instead of 48; a far target is found at most one frame later; 0: every window "
+        "every frame",
         0,
         10,
     )
@@ -62,8 +62,8 @@ class RedetectionParams:
         8,
         "(ours) the lattice is screened with the filter projected on this many principal channel directions "
         "of its model (the PCA feature compression of fDSST, Danelljan et al. TPAMI 2017) and only the 3 "
-        "best screened windows are correlated in full (KCF filters; the scores within their noise, "
-        "occlusion mode faster: docs/experiments.md, eighth pass); 0: every window in full",
+        "best screened windows are correlated in full (KCF filters): occlusion mode faster at scores within "
+        "their noise; 0: every window in full",
         0,
         64,
     )

@@ -35,7 +35,7 @@ class ScaleSearchParams:
         True,
         "(ours) normal mode correlates the 3 middle scale samples and goes outward one at a time only while "
         "the outermost one is the best (penalised peaks): the same pick as the full search on all but a few "
-        "frames, at 3-3.6 windows a frame instead of 5 (docs/experiments.md); off (the papers, and always "
+        "frames, at 3-3.6 windows a frame instead of 5; off (the papers, and always "
         "while re-detecting): every sample",
     )
     climb_ratio: float = param(

@@ -32,8 +32,8 @@ class SweepParams:
         "border instead of ending the track: a target that turned back or stopped while hidden is found "
         "where the pre-occlusion motion cannot put it. The box moves to a tile's peak only when it and a "
         "window centred on it pass the re-acquisition bars (LCT's re-detection, Ma et al. CVPR 2015 Sec. "
-        "3.4); the state turns `tracking` on the next frame's usual checks; 0: off",
-        0,
+        "3.4); the state turns `tracking` on the next frame's usual checks",
+        1,
         100000,
     )
 

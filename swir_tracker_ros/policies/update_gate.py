@@ -28,7 +28,7 @@ class UpdateGateParams:
         10,
         "(ours) tracked frames the update gate must refuse (since it last passed one) before "
         "unconfident_rate applies: from the first refused frame, the tracked frames of a partial occlusion "
-        "taught the filter the occluder (synthetic x_low_contrast_interlaced lost)",
+        "would teach the filter the occluder",
         0,
         100000,
     )

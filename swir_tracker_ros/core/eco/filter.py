@@ -10,7 +10,7 @@
 Per frame: the image sample at the current position is resampled to the support, its feature blocks are
 compressed by P (ECO eq. 3), windowed and interpolated to the continuous domain (C-COT eq. 4); the score is
 sum_d f^d z^d per frequency, maximised on the grid and refined by Newton (core/eco/localise.py); the size
-follows from the fDSST scale filter (ECO-HC) or from the best of several resolutions. A frame that teaches
+follows from the fDSST scale filter (ECO-HC), or stays (`scale_estimator` none). A frame that teaches
 the model adds its detection sample, shifted so that the target is centred, to the sample space (ECO Sec.
 3.2); every N_S-th frame (every frame before `skip_after_frame`) N_CG warm-started CG iterations update the
 filter (ECO Sec. 3.3). The first frame learns P and f jointly by Gauss-Newton (ECO eq. 4-7).
@@ -23,11 +23,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swir_tracker_ros.core.eco import features as feat
-from swir_tracker_ros.core.eco import optimise as opt
+import swir_tracker_ros.core.eco.features as feat
+import swir_tracker_ros.core.eco.optimise as opt
 from swir_tracker_ros.core.eco.fourier import gaussian_label, half_size, shift_phase
 from swir_tracker_ros.core.eco.geometry import SampleGeometry, sample_geometry
-from swir_tracker_ros.core.eco.localise import localise, vertex_offset
+from swir_tracker_ros.core.eco.localise import localise
 from swir_tracker_ros.core.eco.params import ECOParams
 from swir_tracker_ros.core.eco.regularisation import RegOperator, reg_window_spectrum, squared_kernel
 from swir_tracker_ros.core.eco.sample_space import SampleSpace
@@ -96,7 +96,7 @@ class ECOFilter:
         self.center = (box.cx, box.cy)
         self.scale_factor = g.scale
         ih, iw = frame.shape[:2]
-        step = p.search_step if p.scale_estimator == "search" else p.scale_filter_step
+        step = p.scale_filter_step
         self.min_scale = step ** math.ceil(
             math.log(max(5.0 / g.support[0], 5.0 / g.support[1])) / math.log(step)
         )
@@ -113,7 +113,6 @@ class ECOFilter:
         )
         w2 = squared_kernel(wf)
         self.regs = [RegOperator(w2, ky, kx) for ky, kx in self.ks]
-        self.multipliers = self._multipliers()
         # first sample: un-projected blocks, PCA projection, joint Gauss-Newton (ECO eq. 4-7)
         raw = feat.extract(self._patches(frame, self.center, [1.0]), g.blocks)
         self.proj = [feat.pca_projection(x[0], s.dim) for x, s in zip(raw, g.blocks)]
@@ -144,13 +143,6 @@ class ECOFilter:
         if p.scale_estimator == "dsst":
             self.scale_filter = ScaleFilter(dsst_params(p), box.w, box.h, soft=p.hog_soft)
             self.scale_filter.train(frame, box.cx, box.cy, box.w, box.h, 1.0)
-
-    def _multipliers(self) -> list[float]:
-        p = self.params
-        if p.scale_estimator != "search":
-            return [1.0]
-        n = p.search_scales
-        return [p.search_step ** (i - n // 2) for i in range(n)]
 
     # --- state --------------------------------------------------------------------------------------------
 
@@ -210,17 +202,14 @@ class ECOFilter:
         s0 = self.scale_factor if scale_factor is None else scale_factor
         saved, self.scale_factor = self.scale_factor, s0
         try:
-            raw = feat.extract(self._patches(frame, c, self.multipliers), self.geo.blocks)
+            raw = feat.extract(self._patches(frame, c, [1.0]), self.geo.blocks)
         finally:
             self.scale_factor = saved
         z = self._project(raw)
-        i, peak, _, vals = localise(self._score(z), self.params.newton_iterations, self._exclusion())
-        m = self.multipliers[i]
-        if self.params.search_interp and 0 < i < len(vals) - 1:  # (ours) between the searched resolutions
-            m *= self.params.search_step ** vertex_offset(vals[i - 1], vals[i], vals[i + 1])
-        ey, ex = self.geo.support[0] * s0 * m, self.geo.support[1] * s0 * m
+        i, peak, _, _ = localise(self._score(z), self.params.newton_iterations, self._exclusion())
+        ey, ex = self.geo.support[0] * s0, self.geo.support[1] * s0
         cx, cy = c[0] + peak.tx * ex, c[1] + peak.ty * ey
-        factor = m
+        factor = 1.0
         if estimate_scale and self.scale_filter is not None:
             w, h = self.geo.base[1] * s0, self.geo.base[0] * s0
             factor = self.scale_filter.estimate(frame, cx, cy, w, h)

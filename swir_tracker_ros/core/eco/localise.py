@@ -73,15 +73,6 @@ def newton(sf: np.ndarray, u: np.ndarray, v: np.ndarray, iterations: int) -> tup
     return u, v, val
 
 
-def vertex_offset(left: float, centre: float, right: float) -> float:
-    """Offset in [-0.5, 0.5] of the vertex of the parabola through three equally spaced values (0 if the
-    centre is not a maximum of a concave parabola)."""
-    curv = left - 2.0 * centre + right
-    if not curv < 0.0:
-        return 0.0
-    return float(min(max(0.5 * (left - right) / curv, -0.5), 0.5))
-
-
 def _wrap(u: float) -> float:
     """Angle in [-pi, pi)."""
     return (u + math.pi) % (2.0 * math.pi) - math.pi

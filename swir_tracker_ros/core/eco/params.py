@@ -16,11 +16,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from swir_tracker_ros.core.base import FilterParams
+from swir_tracker_ros.core.confidence import PSR_FAILURE
+from swir_tracker_ros.core.scale import DSSTParams
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
-
-SCALE_ESTIMATORS = ("dsst", "search", "none")
 
 
 @dataclass
@@ -39,8 +39,7 @@ class ECOParams(FilterParams):
     min_search_side: float = _f(
         64.0,
         "(ours) the image sample's side is at least this many image pixels: a small target (sqrt(w h) < 16 "
-        "px here) gets a wider search area, e.g. a 10 x 8 px drone 7x instead of 4x (SRE fold 1 +0.005, "
-        "fold 2 -0.000; docs/eco.md); 0: off",
+        "px here) gets a wider search area, e.g. a 10 x 8 px drone 7x instead of 4x; 0: off",
         0.0,
         2000.0,
     )
@@ -104,34 +103,27 @@ class ECOParams(FilterParams):
     newton_iterations: int = _f(5, "Newton iterations on the score (ECO-HC 5)", 0, 50)
     # scale
     scale_estimator: str = _f(
-        "dsst",
-        "dsst: fDSST scale filter after the translation (ECO-HC); search: the filter on `search_scales` "
-        "resolutions (the reference's alternative); none: fixed size",
-        choices=SCALE_ESTIMATORS,
+        "dsst", "dsst: fDSST scale filter after the translation (ECO-HC); none: fixed size",
+        choices=("dsst", "none"),
     )
     scale_filter_scales: int = _f(17, "fDSST scales sampled (ECO-HC 17)", 3, 65)
     scale_filter_interp: int = _f(33, "fDSST response interpolated to this many scales (ECO-HC 33)", 3, 257)
-    scale_filter_step: float = _f(1.02, "fDSST step between interpolated scales (ECO-HC 1.02)", 1.001, 1.2)
+    scale_filter_step: float = _f(
+        DSSTParams.scale_step, "fDSST step between interpolated scales (ECO-HC: DSST's 1.02)", 1.001, 1.2
+    )
     scale_sigma_factor: float = _f(
         1.0 / 16.0, "fDSST label sigma = interp scales x this (ECO-HC 1/16)", 0.01, 1.0
     )
-    scale_learning_rate: float = _f(0.025, "fDSST learning rate (ECO-HC 0.025)", 0.0, 1.0)
-    scale_lambda: float = _f(1e-2, "fDSST regularisation (ECO-HC 1e-2)", 1e-8, 10.0)
+    scale_learning_rate: float = _f(
+        DSSTParams.learning_rate, "fDSST learning rate (ECO-HC: DSST's 0.025)", 0.0, 1.0
+    )
+    scale_lambda: float = _f(DSSTParams.lambda_, "fDSST regularisation (ECO-HC: DSST's 1e-2)", 1e-8, 10.0)
     scale_model_max_area: int = _f(
         2000,
         "fDSST samples resampled to at most this area (ECO-HC 32 x 16 = 512; ours 2000: with 512 the size "
-        "drifts on tall targets, SRE +0.010 / +0.028 on the two folds; docs/eco.md)",
+        "drifts on tall targets)",
         64,
         10000,
-    )
-    search_scales: int = _f(5, "resolutions of the scale search (odd; the reference's alternative: 7)", 1, 15)
-    search_step: float = _f(
-        1.02, "size ratio of neighbouring search resolutions (reference: 1.01)", 1.001, 1.2
-    )
-    search_interp: bool = _f(
-        False,
-        "(ours) search: the size between resolutions, from a parabola through the best one's and its "
-        "neighbours' peaks (log-scale); off: the best resolution",
     )
     # confidence of the response (ours)
     psr_exclusion: float = _f(
@@ -143,11 +135,11 @@ class ECOParams(FilterParams):
 
     # the long-term layer's test on the response (core/eco/base.py)
     failure_psr: float = _f(
-        7.0,
+        PSR_FAILURE,
         "failure (occlusion) test of a detection: PSR (psr_exclusion) below this, paper 000's threshold; "
         "the model learns only from frames that pass it. The continuous peak is no target-independent "
-        "test: a 10 px drone is tracked at peaks of 0.06-0.15 (ECO, OPE), a pedestrian at 0.4-0.5; the PSR "
-        "on target stays above 15 on 95 % of the frames of both folds (docs/eco.md); 0: off",
+        "test (a small drone is tracked at a fraction of a pedestrian's peak), the PSR on the target is; 0: "
+        "off",
         0.0,
         1000.0,
     )
@@ -155,9 +147,8 @@ class ECOParams(FilterParams):
         0.35,
         "(ours) failure also when the PSR falls below this x the mean PSR of the last failure_psr_window "
         "frames that taught the filter (a relative test, as the dissertation's APCE test, eq. 4.96): an "
-        "occluder or a pole keeps ECO's PSR just over 7 (OTB jogging-1, the synthetic occlusions); 0: off. "
-        "Against the mean of every frame since the start it failed targets whose PSR declines slowly (OTB "
-        "freeman1 SRE 0.434 -> 0.200, docs/eco.md)",
+        "occluder or a pole keeps ECO's PSR just over 7; the recent mean, not that of every frame since "
+        "the start, so that a target whose PSR declines slowly is not failed; 0: off",
         0.0,
         1.0,
     )
@@ -171,8 +162,6 @@ class ECOParams(FilterParams):
     def check(self) -> None:
         if self.min_sample_size > self.max_sample_size:
             raise ParameterError("parameter eco.min_sample_size must not exceed eco.max_sample_size")
-        if self.search_scales % 2 == 0:
-            raise ParameterError(f"parameter eco.search_scales = {self.search_scales} must be odd")
         if self.scale_filter_scales % 2 == 0:
             raise ParameterError(
                 f"parameter eco.scale_filter_scales = {self.scale_filter_scales} must be odd"
