@@ -6,9 +6,10 @@ crop side s_z = sqrt((w + p)(h + p)) (SiamFC: s(w + 2p) x s(h + 2p) = A with 2p 
 exemplar is s_z resampled to 127 px; the search region is s_x = s_z * 255 / 127 resampled to 255 px, so
 that both share one scale, scale_z = 127 / s_z. Pixels outside the frame are the frame's mean colour.
 
-Box convention: (x, y, w, h) with pixel i covering [i, i + 1), so the centre is (x + w/2, y + h/2). The
-crop window is placed as the authors' `get_subwindow` places it (whole pixels, side rounded), from the
-centre in pixel-index coordinates (cx - 1/2).
+Box convention: (x, y, w, h) with pixel i covering [i, i + 1), so the centre is (x + w/2, y + h/2). Two
+placements: `cut_subpixel` (the default) centres the crop exactly on the float centre at the exact scale;
+`crop_window` + `cut` place it as the authors' `get_subwindow` does (whole pixels, side rounded, from the
+centre in pixel-index coordinates cx - 1/2).
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ class CropWindow:
 def crop_window(cx: float, cy: float, side: float, out: int) -> CropWindow:
     """The window the authors' `get_subwindow` cuts around the centre (cx, cy): side round(side) (Python
     rounding, at least 1), top-left floor(pos - (side + 1)/2 + 1/2) with pos = cx - 1/2 the pixel-index
-    centre."""
+    centre. Its centre lies 0.5 to 1.5 px left of and above (cx, cy) (`cut_subpixel` has no such offset)."""
     sz = max(1, round(side))
     c = (sz + 1) / 2.0
     x0 = math.floor((cx - 0.5) - c + 0.5)

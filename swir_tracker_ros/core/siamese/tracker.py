@@ -41,7 +41,7 @@ from swir_tracker_ros.core.siamese.maps import (
 )
 from swir_tracker_ros.core.siamese.network import NanoNet
 from swir_tracker_ros.core.siamese.params import SiameseParams
-from swir_tracker_ros.errors import ParameterError, TrackerError
+from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import validate_params
 from swir_tracker_ros.types import Box, TrackState
 
@@ -96,15 +96,13 @@ class SiameseResult:
 
 
 class SiameseTracker:
-    """NanoTrack v2/v3 tracker (module docstring); raises ModelError at construction when weights are
-    missing or corrupt, TrackerError on a bad box or frame."""
+    """NanoTrack v2/v3 tracker (module docstring). Construction raises ParameterError on bad parameters and
+    ModelError when the weights are missing or corrupt; init/update/search raise TrackerError on a bad box
+    or frame."""
 
     def __init__(self, params: SiameseParams | None = None) -> None:
         params = SiameseParams() if params is None else params
-        try:
-            validate_params(params)
-        except ParameterError as exc:
-            raise TrackerError(str(exc)) from None
+        validate_params(params)  # ParameterError naming the parameter
         self.params = params
         self.constants = params.constants
         self.net = NanoNet(self.constants, params.model_dir or None)
