@@ -13,14 +13,21 @@ TRAIN   := .venv-train
 MOTV    := .venv-mot
 MSTAMP  := $(MOTV)/.installed
 TSTAMP  := $(TRAIN)/.installed
+MODELS  := $(VENV)/share/swir_tracker_ros/models/nanotrack
+SHARED_MODELS ?= ../shared/models/nanotrack
 PIP_FLAGS ?= --disable-pip-version-check -q
 
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PYTHONDONTWRITEBYTECODE = 1
 
-.PHONY: venv test test-numerics lint demo demo-sweep bench bench-venv mot-venv train-venv regress train clean
+.PHONY: venv models test test-numerics lint demo demo-sweep bench bench-venv mot-venv train-venv regress train clean
 
-venv: $(STAMP) $(ISTAMP)
+venv: $(STAMP) $(ISTAMP) models
+
+# The Siamese tracker's pinned weights (swir_tracker_ros/core/siamese/weights.py: upstream commit, sha256),
+# copied from $(SHARED_MODELS) when present, else downloaded at the pinned commit; verified either way.
+models:
+	$(PY) swir_tracker_ros/core/siamese/weights.py --dest $(MODELS) --mirror $(SHARED_MODELS)
 
 $(STAMP): requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
 	test -x $(VPY) || $(PY) -m venv $(VENV)
@@ -67,7 +74,7 @@ lint: $(STAMP) $(ISTAMP)
 	$(VENV)/bin/ruff check .
 
 # The suite also checks OpenCV's trackers (.venv-bench) and the ONNX export against torch (.venv-train).
-test: $(STAMP) $(ISTAMP) $(BSTAMP) $(TSTAMP)
+test: $(STAMP) $(ISTAMP) $(BSTAMP) $(TSTAMP) models
 	$(VENV)/bin/ruff check .
 	$(VPY) -m pytest test -q -p no:cacheprovider
 

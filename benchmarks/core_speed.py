@@ -11,7 +11,9 @@ FFT libraries for the filters' real transforms, fps and per-frame p95 of every t
 per-stage profile of our default pipeline (ms per frame; measured in a separate run with timing wrappers
 installed around the core's functions, so the timed runs carry no overhead), and as the last line one
 JSON object (normal_fps, occlusion_fps, opencv_csrt_fps, opencv_kcf_fps, opencv_kcf_gray_fps at 40x100,
-p95_ms_80x200, and the same per size).
+p95_ms_80x200, and the same per size). The Siamese rows (ours v2/v3, core/siamese, and OpenCV's
+``cv2.TrackerNano`` as their peer, same weights directory) run on real frames (``SIAMESE_SEQUENCE``);
+``--siamese-only`` runs just those.
 """
 
 from __future__ import annotations
@@ -467,10 +469,71 @@ def time_opencv(frames8: np.ndarray, box: tuple[float, ...]) -> dict:
         return run_bench_child("--opencv-child", path, "--box", ",".join(str(v) for v in box))
 
 
+# ---------------------------------------------------------------------------------------------- Siamese
+SIAMESE_SEQUENCE = REPO.parent / "shared" / "data" / "sequences" / "antiuav_irclip04"  # 640x512 thermal IR
+
+
+def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
+    """Our Siamese tracker (core/siamese, v2 and v3) and OpenCV's `cv2.TrackerNano` (the v2 ONNX pair from
+    the same model directory) on the same first `n` real frames of `seq` (8-bit gray; TrackerNano gets them
+    as BGR, converted outside the timed loop; ours replicates the channel inside it), one thread."""
+    import cv2
+
+    from swir_tracker_ros.core.siamese.locator import locate
+    from swir_tracker_ros.core.siamese.params import VERSIONS, SiameseParams
+    from swir_tracker_ros.core.siamese.tracker import SiameseTracker
+    from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
+
+    cv2.setNumThreads(1)
+    frames = [read_frame(f) for f in frame_files(seq)[:n]]
+    box = read_gt(seq)[0]
+    out: dict[str, dict] = {}
+    for version in VERSIONS:
+        trk = SiameseTracker(SiameseParams(version=version))
+        trk.init(frames[0], box)
+        times, c0 = [], time.process_time()
+        for f in frames[1:]:
+            t0 = time.perf_counter()
+            trk.update(f)
+            times.append(time.perf_counter() - t0)
+        out[f"siamese_{version}"] = summarise(times, time.process_time() - c0)
+    p = cv2.TrackerNano_Params()
+    p.backbone, p.neckhead = str(locate(VERSIONS["v2"].backbone)), str(locate(VERSIONS["v2"].head))
+    nano = cv2.TrackerNano_create(p)
+    bgr = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames]
+    nano.init(bgr[0], tuple(round(v) for v in box.as_tuple()))
+    times, c0 = [], time.process_time()
+    for f in bgr[1:]:
+        t0 = time.perf_counter()
+        nano.update(f)
+        times.append(time.perf_counter() - t0)
+    out["opencv_nano"] = summarise(times, time.process_time() - c0)
+    return out
+
+
+SIAMESE_NAMES = {"siamese_v2": "ours Siamese v2 (core/siamese)",
+                 "siamese_v3": "ours Siamese v3 (core/siamese)",
+                 "opencv_nano": "OpenCV TrackerNano (v2 weights)"}
+
+
+def print_siamese(res: dict, frames: int) -> None:
+    print(f"\nSiamese trackers on {SIAMESE_SEQUENCE.name}, first {frames} real frames, one thread")
+    print("tracker" + " " * 42 + "fps  cpu fps   p50 ms   p95 ms   max ms")
+    for key, label in SIAMESE_NAMES.items():
+        r = res[key]
+        print(f"  {label:46s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} {r['p95_ms']:8.2f} "
+              f"{r['max_ms']:8.2f}")
+    for key in ("siamese_v2", "siamese_v3"):
+        print(f"  ratio {key} / TrackerNano: {res[key]['fps'] / res['opencv_nano']['fps']:.2f} "
+              f"(cpu {res[key]['cpu_fps'] / res['opencv_nano']['cpu_fps']:.2f})")
+
+
 # ---------------------------------------------------------------------------------------------- main
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=150, help="frames per sequence (one per target size)")
+    ap.add_argument("--siamese-only", action="store_true",
+                    help="only the Siamese rows (ours v2/v3 and cv2.TrackerNano on real frames)")
     ap.add_argument("--opencv-child", help=argparse.SUPPRESS)
     ap.add_argument("--opencv-primitives", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--box", help=argparse.SUPPRESS)
@@ -483,6 +546,12 @@ def main() -> None:
         return
     import cv2
 
+    if args.siamese_only:
+        siamese = time_siamese(args.frames)
+        print_siamese(siamese, args.frames)
+        print(json.dumps({f"{k}_{m}": round(v[m], 2) for k, v in siamese.items() for m in ("fps", "cpu_fps",
+                                                                                         "p95_ms")}))
+        return
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import eco_speed  # benchmarks/eco_speed.py: the ECO base filter and the ECO-HC port (ECOHC_PORT_DIR)
 
@@ -559,6 +628,9 @@ def main() -> None:
                 cpu = head[ours]["cpu_fps"] / head[peer]["cpu_fps"]
                 print(f"  ratio {ours:7s} / {names[peer]:28s} at 40x100: {ratio:.2f} (cpu {cpu:.2f})")
 
+    siamese = time_siamese(args.frames)
+    print_siamese(siamese, args.frames)
+
     print("\nper-stage profile of the default pipeline, CPU ms/frame (stages exclusive; phases inclusive)")
     keys = sorted(
         {k for p in profiles.values() for k in p}, key=lambda k: (k.startswith("phase"), k == "total")
@@ -580,6 +652,9 @@ def main() -> None:
         "p95_ms_80x200_occlusion": round(results["80x200"]["occlusion"]["p95_ms"], 2),
         "dsst_fps": fps("40x100", "dsst"),
         "opencv_version": prim["version"],
+        "siamese_v2_fps": round(siamese["siamese_v2"]["fps"], 1),
+        "siamese_v3_fps": round(siamese["siamese_v3"]["fps"], 1),
+        "opencv_nano_fps": round(siamese["opencv_nano"]["fps"], 1),
     }
     for tag in results:
         for key in names:

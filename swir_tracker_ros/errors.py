@@ -12,6 +12,10 @@ class TrackerError(SwirTrackerError):
     """The tracking core was given something it cannot track (bad box, bad frame, bad parameter)."""
 
 
+class ModelError(TrackerError):
+    """A model file a tracker needs (the Siamese network's weights) is missing or not the pinned one."""
+
+
 class KalmanError(SwirTrackerError):
     """The Kalman filter family was given inconsistent shapes, non-finite values or bad parameters."""
 

@@ -18,7 +18,11 @@ from datetime import datetime, timezone
 from multiprocessing import get_context
 from pathlib import Path
 
-from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.core.siamese.locator import locate
+from swir_tracker_ros.core.siamese.params import VERSIONS as SIAMESE_VERSIONS
+from swir_tracker_ros.core.siamese.params import SiameseParams
+from swir_tracker_ros.core.siamese.tracker import SiameseTracker
+from swir_tracker_ros.errors import HarnessError, ModelError
 from swir_tracker_ros.harness.compare import bench_python, opencv_code, opencv_label, run_worker
 from swir_tracker_ros.harness.evaluate import (
     OPE,
@@ -40,6 +44,7 @@ from swir_tracker_ros.harness.store import (
 )
 
 PROTOCOLS = ("ope", "sre")
+WHOLE_PIXEL = "-wholepixel"  # Siamese configuration suffix: the authors' whole-pixel crops
 _COST = {"CSRT": 0, "swir": 1, "KCF": 2, "MOSSE": 3}  # slowest first (better packing on --jobs)
 
 
@@ -60,11 +65,12 @@ def overrides_label(configuration: str, overrides: Sequence[str]) -> str:
 
 @dataclass(frozen=True)
 class Player:
-    """Who is played: our tracker in a configuration (tracker `swir`) or an OpenCV tracker (`opencv`)."""
+    """Who is played: our tracker in a configuration (tracker `swir`), our Siamese network tracker alone
+    (`siamese`, configuration = model version) or an OpenCV tracker (`opencv`)."""
 
     label: str
-    tracker: str  # "swir" or "opencv"
-    configuration: str  # our configuration's name, or the OpenCV tracker's (CSRT)
+    tracker: str  # "swir", "siamese" or "opencv"
+    configuration: str  # our configuration's name, the Siamese model version (v2), or the OpenCV tracker's
     overrides: tuple[str, ...] = ()
 
     @classmethod
@@ -78,8 +84,24 @@ class Player:
     def opencv(cls, tracker: str) -> Player:
         return cls(opencv_label(tracker), "opencv", tracker)
 
+    @classmethod
+    def siamese(cls, version: str, whole_pixel: bool = False) -> Player:
+        """The Siamese tracker (core/siamese) with NanoTrack weights `version`, label `siamese_<version>`;
+        `whole_pixel`: with the authors' whole-pixel crops (SiameseParams.subpixel_crops False), label
+        `siamese_<version>_wholepixel`."""
+        if version not in SIAMESE_VERSIONS:
+            raise HarnessError(f"unknown Siamese model version {version!r}; known: "
+                               f"{', '.join(SIAMESE_VERSIONS)}")
+        try:  # fail now on missing weights, not in a pool worker
+            for rel in (SIAMESE_VERSIONS[version].backbone, SIAMESE_VERSIONS[version].head):
+                locate(rel)
+        except ModelError as exc:
+            raise HarnessError(str(exc)) from None
+        conf = version + (WHOLE_PIXEL if whole_pixel else "")
+        return cls(f"siamese_{conf.replace('-', '_')}", "siamese", conf)
+
     def code(self) -> str:
-        return code_hash() if self.tracker == "swir" else opencv_code(bench_python())
+        return opencv_code(bench_python()) if self.tracker == "opencv" else code_hash()
 
     def provenance(self, src: Source, style: str | None) -> dict:
         return {"tracker": self.tracker, "configuration": self.configuration,
@@ -148,6 +170,10 @@ def execute(task: Task) -> TaskReport:
     p, src = task.player, task.source
     if p.tracker == "swir":
         runs = run_starts(src, make_tracker_factory(p.configuration, p.overrides), task.starts, task.style)
+    elif p.tracker == "siamese":
+        version, _, mode = p.configuration.partition("-")
+        params = SiameseParams(version=version, subpixel_crops=mode != WHOLE_PIXEL[1:])
+        runs = run_starts(src, lambda: SiameseTracker(params), task.starts, task.style)
     else:
         runs = run_worker(src, p.configuration, bench_python(), task.starts, task.style)
     store = RunStore(task.root)

@@ -1,0 +1,217 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`SiameseTracker`: NanoTrack's one-shot Siamese tracking (SiamFC / SiamRPN++ / SiamBAN), OpenCV style.
+
+`init(frame, box)` cuts the exemplar and keeps its features (the template stays fixed, as the authors
+keep it; `set_exemplar` re-sets it from a box); `update(frame)` searches the 255 px region around the last
+state and returns the box, the best score and the maps; `search(frame, cx, cy, w, h)` is the same search
+around any centre and target size (re-detection windows), without touching the state. Per search (SiamRPN
+Sec. 4.3 as NanoTrack's tracker does it): score = softmax foreground probability, per-point boxes from the
+ltrb distances, penalty = exp(-(r_c s_c - 1) k), penalised map = (1 - w_i) penalty * score + w_i cosine,
+best point = its argmax, lr = penalty * score * size_lr, new size = (1 - lr) old + lr regressed, clipped
+to the image. One-channel 8/16-bit frames go through the tracker's frame conditioning to 8 bits and are
+replicated to the three channels of the network.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from swir_tracker_ros.core.conditioning import FrameConditioner, to_gray
+from swir_tracker_ros.core.siamese.crops import (
+    CropWindow,
+    blob,
+    context_side,
+    crop_window,
+    cut,
+    cut_subpixel,
+)
+from swir_tracker_ros.core.siamese.maps import (
+    Boxes,
+    change_penalty,
+    clip_state,
+    cosine_window,
+    decode_ltrb,
+    point_grid,
+    size_update,
+    softmax_score,
+    window_mix,
+)
+from swir_tracker_ros.core.siamese.network import NanoNet
+from swir_tracker_ros.core.siamese.params import SiameseParams
+from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.paramfield import validate_params
+from swir_tracker_ros.types import Box, TrackState
+
+
+@dataclass(frozen=True)
+class SiameseDetection:
+    """One search: the chosen point's box and scores, and the full maps for the layers above (PSR, peaks).
+
+    Maps are (S, S), row = y, column = x; `score_map` is the foreground probability before any penalty,
+    `penalised_map` the value the best point maximises (change penalty and cosine window applied)."""
+
+    box: Box  # the chosen point's regressed box in image pixels (size not smoothed)
+    smoothed: Box  # centre of `box`, size smoothed by lr from the searched size, clipped to the image
+    score: float  # foreground probability at the chosen point
+    pscore: float  # penalised map at the chosen point
+    penalty: float  # change penalty at the chosen point
+    lr: float  # penalty * score * size_lr
+    index: tuple[int, int]  # (row, column) of the chosen point
+    score_map: np.ndarray
+    penalised_map: np.ndarray
+    penalty_map: np.ndarray
+    boxes: Boxes  # every point's box, search-crop pixels relative to the searched centre
+    window: CropWindow  # the search crop in the image
+    center: tuple[float, float]  # searched centre (image pixels)
+    scale: float  # scale_z = exemplar / s_z: search-crop pixels per image pixel
+    seconds: float  # cost of this search (crop, network, decoding)
+
+    def point_box(self, row: int, col: int) -> Box:
+        """The regressed box of grid point (row, col) in image pixels."""
+        b, s = self.boxes, self.scale
+        return Box.from_center(self.center[0] + b.cx[row, col] / s, self.center[1] + b.cy[row, col] / s,
+                               b.w[row, col] / s, b.h[row, col] / s)
+
+
+@dataclass(frozen=True)
+class SiameseResult:
+    """Outcome of `SiameseTracker.update`. The network never judges failure: `state` is always TRACKING
+    (the layers above decide from the maps)."""
+
+    box: Box
+    score: float
+    detection: SiameseDetection
+    state: TrackState = TrackState.TRACKING
+
+    @property
+    def score_map(self) -> np.ndarray:
+        return self.detection.score_map
+
+    @property
+    def penalised_map(self) -> np.ndarray:
+        return self.detection.penalised_map
+
+
+class SiameseTracker:
+    """NanoTrack v2/v3 tracker (module docstring). Construction raises ParameterError on bad parameters and
+    ModelError when the weights are missing or corrupt; init/update/search raise TrackerError on a bad box
+    or frame."""
+
+    def __init__(self, params: SiameseParams | None = None) -> None:
+        params = SiameseParams() if params is None else params
+        validate_params(params)  # ParameterError naming the parameter
+        self.params = params
+        self.constants = params.constants
+        self.net = NanoNet(self.constants, params.model_dir or None)
+        self._conditioner = FrameConditioner(params.conditioning)
+        self._grid: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._fill: np.ndarray | None = None
+        self.center: tuple[float, float] = (0.0, 0.0)
+        self.size: tuple[float, float] = (0.0, 0.0)
+
+    # --- frames ------------------------------------------------------------------------------------------
+
+    def prepare(self, frame: np.ndarray, bit_depth: int | None = None) -> np.ndarray:
+        """The 8-bit image the network sees: an 8-bit gray or BGR frame as it is; any other frame (16-bit,
+        float, or a conditioning that changes 8-bit frames) through the frame conditioning to 8-bit gray."""
+        cfg = self.params.conditioning
+        plain = cfg.stretch != "always" and cfg.dead_pixel_threshold == 0.0 and cfg.deinterlace == "off"
+        if isinstance(frame, np.ndarray) and frame.dtype == np.uint8 and plain:
+            img = frame[:, :, 0] if frame.ndim == 3 and frame.shape[2] == 1 else frame
+            if img.ndim == 3 and img.shape[2] == 4:
+                img = img[:, :, :3]
+            if img.ndim == 2 or (img.ndim == 3 and img.shape[2] == 3):
+                if min(img.shape[:2]) < 8:
+                    raise TrackerError(f"frame of {img.shape[1]}x{img.shape[0]} pixels is too small to track")
+                return img
+            to_gray(img)  # raises the conditioning's error for a bad shape
+        gray = self._conditioner(frame, bit_depth)
+        return np.clip(gray * 255.0 + 0.5, 0, 255).astype(np.uint8)
+
+    # --- template ----------------------------------------------------------------------------------------
+
+    def set_exemplar(self, frame: np.ndarray, box: Box, bit_depth: int | None = None) -> None:
+        """Cut the exemplar around `box` (127 px, context 0.5, mean padding) and keep its features; the
+        padding colour becomes this frame's mean. The tracking state is not changed."""
+        if not isinstance(box, Box) or not box.is_valid():
+            raise TrackerError(f"exemplar box must be finite with positive size, got {box}")
+        img = self.prepare(frame, bit_depth)
+        self._set_exemplar(img, box)
+
+    def _set_exemplar(self, img: np.ndarray, box: Box) -> None:
+        p = self.params
+        self._fill = np.mean(img, axis=(0, 1))
+        s_z = context_side(box.w, box.h, p.context_amount)
+        if p.subpixel_crops:
+            patch = cut_subpixel(img, box.cx, box.cy, s_z, p.exemplar_size, self._fill)
+        else:
+            patch = cut(img, crop_window(box.cx, box.cy, s_z, p.exemplar_size), self._fill)
+        self.net.set_exemplar(blob(patch))
+
+    def init(self, frame: np.ndarray, box: Box, bit_depth: int | None = None) -> None:
+        """Start tracking `box` in `frame`: exemplar features and state (centre, size)."""
+        if not isinstance(box, Box) or not box.is_valid():
+            raise TrackerError(f"initial box must be finite with positive size, got {box}")
+        self._conditioner.reset()
+        img = self.prepare(frame, bit_depth)
+        self._set_exemplar(img, box)
+        self.center, self.size = box.center, (box.w, box.h)
+
+    # --- search ------------------------------------------------------------------------------------------
+
+    def _maps(self, side: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(px, py, cosine window) of a score map of side S, made once per S (S comes from the model)."""
+        if side not in self._grid:
+            px, py = point_grid(side, self.params.stride)
+            self._grid[side] = (px, py, cosine_window(side))
+        return self._grid[side]
+
+    def search(self, frame: np.ndarray, cx: float, cy: float, w: float, h: float,
+               bit_depth: int | None = None) -> SiameseDetection:
+        """Search a 255 px region around (cx, cy) for the template, for a target of size (w, h); the state
+        is not changed (module docstring)."""
+        return self._search(self.prepare(frame, bit_depth), cx, cy, w, h)
+
+    def _search(self, img: np.ndarray, cx: float, cy: float, w: float, h: float) -> SiameseDetection:
+        if self._fill is None:
+            raise TrackerError("the Siamese tracker has no template: call init() first")
+        if not all(np.isfinite(v) for v in (cx, cy, w, h)) or w <= 0 or h <= 0:
+            raise TrackerError(f"search around ({cx}, {cy}) for size {w}x{h}: not a finite positive size")
+        t0 = time.perf_counter()
+        p, c = self.params, self.constants
+        s_z = context_side(w, h, p.context_amount)
+        scale = p.exemplar_size / s_z
+        s_x = s_z * p.instance_size / p.exemplar_size
+        win = crop_window(cx, cy, s_x, p.instance_size)
+        if p.subpixel_crops:
+            patch = cut_subpixel(img, cx, cy, s_x, p.instance_size, self._fill)
+        else:
+            patch = cut(img, win, self._fill)
+        cls, loc = self.net.search(blob(patch))
+        score = softmax_score(cls)
+        px, py, window = self._maps(score.shape[-1])
+        boxes = decode_ltrb(loc, px, py)
+        penalty = change_penalty(boxes, w * scale, h * scale, c.penalty_k)
+        pmap = window_mix(penalty * score, window, c.window_influence)
+        row, col = np.unravel_index(int(np.argmax(pmap)), pmap.shape)
+        lr = float(penalty[row, col] * score[row, col] * c.size_lr)
+        bx, by = cx + boxes.cx[row, col] / scale, cy + boxes.cy[row, col] / scale
+        bw, bh = boxes.w[row, col] / scale, boxes.h[row, col] / scale
+        sw, sh = size_update(w, h, bw, bh, lr)
+        H, W = img.shape[:2]
+        scx, scy, sw, sh = clip_state(bx, by, sw, sh, W, H, p.min_size)
+        return SiameseDetection(
+            Box.from_center(float(bx), float(by), float(bw), float(bh)),
+            Box.from_center(scx, scy, sw, sh), float(score[row, col]), float(pmap[row, col]),
+            float(penalty[row, col]), lr, (int(row), int(col)), score, pmap, penalty, boxes, win, (cx, cy),
+            scale, time.perf_counter() - t0)
+
+    def update(self, frame: np.ndarray, bit_depth: int | None = None) -> SiameseResult:
+        """Track one frame: search around the last state, move to the chosen point, smooth the size."""
+        det = self._search(self.prepare(frame, bit_depth), *self.center, *self.size)
+        box = det.smoothed
+        self.center, self.size = box.center, (box.w, box.h)
+        return SiameseResult(box, det.score, det)
