@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cv2
@@ -16,6 +17,7 @@ from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.errors import KalmanError, TrackerError
+from swir_tracker_ros.policies.fusion import NetworkFusion
 from swir_tracker_ros.track import Frame, Track
 from swir_tracker_ros.tracker_params import TrackerParams
 from swir_tracker_ros.types import Box, SearchMode, TrackResult, TrackState
@@ -52,6 +54,8 @@ class Tracker:
         self.params = params if params is not None else configuration(DEFAULT_CONFIGURATION)
         self.params.validate()
         self._conditioner = FrameConditioner(self.params.conditioning)
+        # the network beside the filter, its weights loaded now (ModelError at start-up, not on a frame)
+        self._fusion = NetworkFusion(self.params.fusion) if self.params.fusion is not None else None
         self.reset()
 
     @staticmethod
@@ -96,6 +100,8 @@ class Tracker:
         base = make_filter(p.base, b.w, b.h)  # the configuration's base filter, selected once
         base.initialise(img, b)
         self._track = Track(p, base, b, frame.shape)
+        if self._fusion is not None:
+            self._fusion.start(frame, box, bit_depth)
         self._state = TrackState.TRACKING
 
     def update(
@@ -133,7 +139,7 @@ class Tracker:
             if t.motion is None:
                 return self._step_cf(t, img)
             ds = self.params.conditioning.downscale
-            return self._step(t, img, dx * ds, dy * ds, frames)
+            return self._fuse(frame, bit_depth, self._step(t, img, dx * ds, dy * ds, frames), (dx, dy))
         except _RECOVERABLE:
             self._state = TrackState.LOST
             return self._result(t.box, TrackState.LOST)
@@ -250,7 +256,8 @@ class Tracker:
         if f.jump is not None:
             size = f.jump.size
         elif not f.failed or self.params.redetection.grid_scale_search:
-            size = (pred.w * f.scale, pred.h * f.scale)
+            stretch = math.sqrt(det.aspect)  # 1 but for a filter that measures the aspect ratio too
+            size = (pred.w * f.scale * stretch, pred.h * f.scale / stretch)
         else:
             size = (pred.w, pred.h)
         k = f.threshold = motion.threshold(det.peak)
@@ -299,6 +306,14 @@ class Tracker:
         return self._result(t.box, state, det=f.det, mode=f.mode, measured=not f.failed,
                             updated=f.rate is not None, windows=f.shown,
                             threshold=f.threshold if f.threshold is not None else 0.0)
+
+    def _fuse(self, frame: np.ndarray, bit_depth: int | None, res: TrackResult,
+              ego_shift: tuple[float, float]) -> TrackResult:
+        """11. (fusion) The box from the filter's and the network's beside it (policies/fusion.py)."""
+        if self._fusion is None or res.state is TrackState.LOST:
+            return res
+        box, _ = self._fusion.fuse(frame, bit_depth, res.box, res.state is TrackState.TRACKING, ego_shift)
+        return dataclasses.replace(res, box=box)
 
     def _result(self, box: Box, state: TrackState, det: Detection | None = None,
                 mode: SearchMode = SearchMode.NORMAL, measured: bool = False, updated: bool = False,

@@ -17,6 +17,7 @@ from swir_tracker_ros.core.registry import filter_class
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import nested, param, validate_params
 from swir_tracker_ros.policies.coast import CoastParams
+from swir_tracker_ros.policies.fusion import FusionParams
 from swir_tracker_ros.policies.lookalike import LookalikeParams
 from swir_tracker_ros.policies.memory import MemoryParams
 from swir_tracker_ros.policies.motion import MotionParams
@@ -55,6 +56,9 @@ class TrackerParams:
     rejected: RejectedParams | None = nested(
         RejectedParams, "update and size of a rejected frame (policies/rejected.py)")
     update: UpdateGateParams = nested(UpdateGateParams, "model update gate (policies/update_gate.py)")
+    fusion: FusionParams | None = nested(
+        lambda: None, "a Siamese network tracking beside the base filter, one box from both "
+        "(policies/fusion.py); none: the base filter alone")
     conditioning: ConditioningConfig = nested(
         ConditioningConfig, "frame conditioning before any window is sampled (core/conditioning.py)")
     trail_frames: int = param(

@@ -14,13 +14,24 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 
-from swir_tracker_ros.configs import cf, eco, kalman, measured, robust, robust_adaptive, robust_adaptive_r
+from swir_tracker_ros.configs import (
+    cf,
+    eco,
+    fused,
+    kalman,
+    measured,
+    robust,
+    robust_adaptive,
+    robust_adaptive_r,
+    siamese,
+)
 from swir_tracker_ros.core.registry import BASE_FILTERS
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param
 from swir_tracker_ros.tracker_params import TrackerParams
 
-_MODULES: tuple[ModuleType, ...] = (cf, kalman, robust, robust_adaptive, robust_adaptive_r, measured, eco)
+_MODULES: tuple[ModuleType, ...] = (cf, kalman, robust, robust_adaptive, robust_adaptive_r, measured, eco,
+                                  siamese, fused)
 CONFIGURATIONS: dict[str, Callable[[str | None], TrackerParams]] = {
     m.__name__.rsplit(".", 1)[-1]: m.params for m in _MODULES
 }

@@ -19,3 +19,6 @@ class Detection:
     apce: float
     scale: float  # size factor of the window relative to the predicted size
     window: Box
+    # (filters that measure the size themselves) the measured aspect ratio w/h over the predicted one:
+    # the size is (w sqrt(aspect), h / sqrt(aspect)) x scale
+    aspect: float = 1.0

@@ -6,10 +6,11 @@ from __future__ import annotations
 from swir_tracker_ros.core.base import BaseFilter, FilterParams
 from swir_tracker_ros.core.eco.base import ECOBase
 from swir_tracker_ros.core.filters import BACFFilter, DCFCAFilter, KCFFilter
+from swir_tracker_ros.core.siamese.base import SiameseBase
 from swir_tracker_ros.errors import ParameterError
 
 BASE_FILTERS: dict[str, type[BaseFilter]] = {
-    cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter, ECOBase)
+    cls.name: cls for cls in (KCFFilter, DCFCAFilter, BACFFilter, ECOBase, SiameseBase)
 }
 """Every base filter by its `name` (`configuration(name, base)`, ROS `tracker.base_filter`); the first is
 the papers' (paper 000: KCF)."""

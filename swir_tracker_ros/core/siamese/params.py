@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from swir_tracker_ros.core.base import FilterParams
 from swir_tracker_ros.core.conditioning import ConditioningConfig
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import nested, param
@@ -38,8 +39,8 @@ VERSIONS: dict[str, VersionConstants] = {
 }
 
 
-@dataclass(frozen=True)
-class SiameseParams:
+@dataclass
+class SiameseParams(FilterParams):
     """Parameters of `SiameseTracker`. The three tracking constants left at None take the version's value
     (`VERSIONS`); set them to override it."""
 
