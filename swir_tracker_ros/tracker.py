@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import cv2
@@ -54,7 +53,6 @@ class Tracker:
         self.params = params if params is not None else configuration(DEFAULT_CONFIGURATION)
         self.params.validate()
         self._conditioner = FrameConditioner(self.params.conditioning)
-        # the network beside the filter, its weights loaded now (ModelError at start-up, not on a frame)
         self._fusion = NetworkFusion(self.params.fusion) if self.params.fusion is not None else None
         self.reset()
 
@@ -139,7 +137,8 @@ class Tracker:
             if t.motion is None:
                 return self._step_cf(t, img)
             ds = self.params.conditioning.downscale
-            return self._fuse(frame, bit_depth, self._step(t, img, dx * ds, dy * ds, frames), (dx, dy))
+            res = self._step(t, img, dx * ds, dy * ds, frames)
+            return res if self._fusion is None else self._fusion.result(frame, bit_depth, res, (dx, dy))
         except _RECOVERABLE:
             self._state = TrackState.LOST
             return self._result(t.box, TrackState.LOST)
@@ -306,14 +305,6 @@ class Tracker:
         return self._result(t.box, state, det=f.det, mode=f.mode, measured=not f.failed,
                             updated=f.rate is not None, windows=f.shown,
                             threshold=f.threshold if f.threshold is not None else 0.0)
-
-    def _fuse(self, frame: np.ndarray, bit_depth: int | None, res: TrackResult,
-              ego_shift: tuple[float, float]) -> TrackResult:
-        """11. (fusion) The box from the filter's and the network's beside it (policies/fusion.py)."""
-        if self._fusion is None or res.state is TrackState.LOST:
-            return res
-        box, _ = self._fusion.fuse(frame, bit_depth, res.box, res.state is TrackState.TRACKING, ego_shift)
-        return dataclasses.replace(res, box=box)
 
     def _result(self, box: Box, state: TrackState, det: Detection | None = None,
                 mode: SearchMode = SearchMode.NORMAL, measured: bool = False, updated: bool = False,

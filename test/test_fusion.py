@@ -86,10 +86,15 @@ def test_siamese_base_filter_tracks_and_measures_its_aspect(crossing) -> None:
     frames, gt = crossing
     trk = Tracker(configuration("siamese"))
     trk.init(frames[0], gt[0])
+    ious, aspects = [], []
     for k in range(1, N):
         res = trk.update(frames[k])
-        assert res.state is TrackState.TRACKING and res.box.iou(gt[k]) > 0.5, (k, res.box, gt[k])
+        assert res.state is TrackState.TRACKING and res.box.iou(gt[k]) > 0.3, (k, res.box, gt[k])
         assert res.psr >= 7.0  # the failure test: the score map's PSR (paper 000's threshold)
+        ious.append(res.box.iou(gt[k]))
+        aspects.append(res.box.w / res.box.h)
+    assert np.mean(ious) > 0.6
+    assert len(set(np.round(aspects, 6))) > 1  # the size is not the start box's aspect ratio scaled
 
 
 def test_missing_weights_fail_at_start_up(tmp_path, monkeypatch) -> None:

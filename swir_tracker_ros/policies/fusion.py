@@ -17,6 +17,7 @@ independent estimators):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -25,7 +26,7 @@ import numpy as np
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
 from swir_tracker_ros.paramfield import nested, param
-from swir_tracker_ros.types import Box
+from swir_tracker_ros.types import Box, TrackResult, TrackState
 
 
 @dataclass
@@ -50,7 +51,8 @@ def box_iou(a: Box, b: Box) -> float:
 
 def mean_box(a: Box, b: Box) -> Box:
     """The mean of two estimates of one box: centres averaged, width and height by their geometric mean."""
-    return Box.from_center(0.5 * (a.cx + b.cx), 0.5 * (a.cy + b.cy), math.sqrt(a.w * b.w), math.sqrt(a.h * b.h))
+    return Box.from_center(0.5 * (a.cx + b.cx), 0.5 * (a.cy + b.cy),
+                           math.sqrt(a.w * b.w), math.sqrt(a.h * b.h))
 
 
 class NetworkFusion:
@@ -58,7 +60,8 @@ class NetworkFusion:
 
     def __init__(self, p: FusionParams) -> None:
         self.p = p
-        self.net = SiameseTracker(p.network)  # ModelError here when the weights are missing
+        # built with the tracker: a missing or corrupt model is a ModelError at start-up, not on a frame
+        self.net = SiameseTracker(p.network)
 
     def start(self, frame: np.ndarray, box: Box, bit_depth: int | None) -> None:
         """The network's template and state from the start box (input pixels)."""
@@ -79,3 +82,12 @@ class NetworkFusion:
             self.net.center, self.net.size = both.center, (both.w, both.h)
             return both, "both"
         return box, "filter"
+
+    def result(self, frame: np.ndarray, bit_depth: int | None, res: TrackResult,
+               ego_shift: tuple[float, float]) -> TrackResult:
+        """The tracker's result of the frame with the fused box (a `lost` frame as it is): the last stage of
+        `Tracker.update`."""
+        if res.state is TrackState.LOST:
+            return res
+        box, _ = self.fuse(frame, bit_depth, res.box, res.state is TrackState.TRACKING, ego_shift)
+        return dataclasses.replace(res, box=box)
