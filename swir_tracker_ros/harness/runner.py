@@ -66,10 +66,10 @@ def overrides_label(configuration: str, overrides: Sequence[str]) -> str:
 @dataclass(frozen=True)
 class Player:
     """Who is played: our tracker in a configuration (tracker `swir`), our Siamese network tracker alone
-    (`siamese`, configuration = model version) or an OpenCV tracker (`opencv`)."""
+    (`network`, configuration = model version) or an OpenCV tracker (`opencv`)."""
 
     label: str
-    tracker: str  # "swir", "siamese" or "opencv"
+    tracker: str  # "swir", "network" (the standalone Siamese tracker) or "opencv"
     configuration: str  # our configuration's name, the Siamese model version (v2), or the OpenCV tracker's
     overrides: tuple[str, ...] = ()
 
@@ -98,7 +98,7 @@ class Player:
         except ModelError as exc:
             raise HarnessError(str(exc)) from None
         conf = version + (WHOLE_PIXEL if whole_pixel else "")
-        return cls(f"siamese_{conf.replace('-', '_')}", "siamese", conf)
+        return cls(f"siamese_{conf.replace('-', '_')}", "network", conf)
 
     def code(self) -> str:
         return opencv_code(bench_python()) if self.tracker == "opencv" else code_hash()
@@ -170,7 +170,7 @@ def execute(task: Task) -> TaskReport:
     p, src = task.player, task.source
     if p.tracker == "swir":
         runs = run_starts(src, make_tracker_factory(p.configuration, p.overrides), task.starts, task.style)
-    elif p.tracker == "siamese":
+    elif p.tracker == "network":
         version, _, mode = p.configuration.partition("-")
         params = SiameseParams(version=version, subpixel_crops=mode != WHOLE_PIXEL[1:])
         runs = run_starts(src, lambda: SiameseTracker(params), task.starts, task.style)

@@ -24,6 +24,7 @@ import numpy as np
 from swir_tracker_ros.core.base import BaseFilter
 from swir_tracker_ros.core.confidence import apce, psr
 from swir_tracker_ros.core.detection import Detection
+from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseDetection, SiameseTracker
 from swir_tracker_ros.kalman import PAPER000_KCF, BoxModel, ThresholdMap, kcf_box_model
@@ -55,9 +56,10 @@ class SiameseBase(BaseFilter):
 
     # ------------------------------------------------------------------ frames
     def _image(self, img: np.ndarray) -> np.ndarray:
-        """The 8-bit image the network sees, from the tracker's conditioned [0, 1] frame (once a frame)."""
+        """The 8-bit image the network sees, from the tracker's conditioned [0, 1] frame (once a frame; a
+        pre-smoothed frame's raw pixels: the network's crops are resampled to its own scale already)."""
         if self._frame is None or self._frame[0] != id(img):
-            gray = np.asarray(img)
+            gray = img.raw if isinstance(img, SmoothedFrame) else np.asarray(img)
             self._frame = (id(img), np.clip(gray * 255.0 + 0.5, 0.0, 255.0).astype(np.uint8))
         return self._frame[1]
 
