@@ -2,11 +2,11 @@
 """The fast correlation path (issue 17: batched peak analysis, compiled cross-power spectrum and window
 cuts, core/corr_jit.py) gives the numbers of the code it replaced, bit for bit.
 
-References: `confidence.analyse` per window (the loop `BaseFilter._detections` ran), `np.einsum("nchw,chw->
-nhw", zf, np.conj(xf))` (the old `gaussian_correlation`), the per-window `np.multiply` slices (the old
-`_union_maps`). Real data: a KCF trained on a real sequence, the re-detection lattice forced on every frame
-(PSR threshold no peak reaches), so the responses, spectra and union maps are the ones the tracker uses in
-a long occlusion. Tolerance: none (a speed change must not move a score).
+References: `confidence.analyse` per window (the loop `TemplateFilter._detections` ran),
+`np.einsum("nchw,chw->nhw", zf, np.conj(xf))` (the old `gaussian_correlation`), the per-window `np.multiply`
+slices (the old `_union_maps`). Real data: a KCF trained on a real sequence, the re-detection lattice forced
+on every frame (PSR threshold no peak reaches), so the responses, spectra and union maps are the ones the
+tracker uses in a long occlusion. Tolerance: none (a speed change must not move a score).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core import base, confidence, fhog, kcf, kernels
+from swir_tracker_ros.core import confidence, fhog, kcf, kernels, template
 from swir_tracker_ros.core.conditioning import presmooth
 from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.tracker import Tracker, TrackerParams
@@ -63,7 +63,7 @@ def recorded(sequences_dir: Path) -> dict:
     frames, box = _frames(sequences_dir, 45)
     rec: dict = {"respond": [], "union": []}
     mp = pytest.MonkeyPatch()
-    orig_respond, orig_union = kcf.KCF.respond, base.BaseFilter._union_maps
+    orig_respond, orig_union = kcf.KCF.respond, template.TemplateFilter._union_maps
 
     def respond(self, z):
         r = orig_respond(self, z)
@@ -78,7 +78,7 @@ def recorded(sequences_dir: Path) -> dict:
         return r
 
     mp.setattr(kcf.KCF, "respond", respond)
-    mp.setattr(base.BaseFilter, "_union_maps", union)
+    mp.setattr(template.TemplateFilter, "_union_maps", union)
     try:
         rec["results"] = _run(frames, box)
     finally:
