@@ -158,15 +158,16 @@ def test_resolution_change_reinitialises_on_the_scaled_box(context: Context) -> 
 def test_ego_shift_from_joint_states_and_camera_info(context: Context) -> None:
     node, _ = make(context)
     try:
-        node._on_camera_info(camera_info_from_intrinsics(Intrinsics(500.0, 500.0, 120.0, 96.0, W, H)))
-        node._on_camera_info(CameraInfo(width=W, height=H))  # uncalibrated: ignored, previous one kept
+        node.inputs.on_camera_info(camera_info_from_intrinsics(Intrinsics(500.0, 500.0, 120.0, 96.0, W, H)))
+        node.inputs.on_camera_info(CameraInfo(width=W, height=H))  # uncalibrated: ignored, previous one kept
         for t, pan, tilt in ((0.9, 0.0, 0.0), (1.1, 0.02, -0.01)):
-            node._on_joint_state(JointState(header=header(t), name=["tilt", "pan"], position=[tilt, pan]))
-        node._on_joint_state(JointState(header=header(1.2), name=["pan"], position=[0.5]))  # ignored
-        intr = node._intrinsics(W, H)
+            node.inputs.on_joint_state(JointState(
+                header=header(t), name=["tilt", "pan"], position=[tilt, pan]))
+        node.inputs.on_joint_state(JointState(header=header(1.2), name=["pan"], position=[0.5]))  # ignored
+        intr = node.inputs.intrinsics(W, H)
         assert intr.fx == 500.0
-        assert node._ego_shift(0.9, intr) == (0.0, 0.0)
-        dx, dy = node._ego_shift(1.0, intr)  # head halfway: pan +0.01 (left), tilt -0.005 (down)
+        assert node.inputs.ego_shift(0.9, intr) == (0.0, 0.0)
+        dx, dy = node.inputs.ego_shift(1.0, intr)  # head halfway: pan +0.01 (left), tilt -0.005 (down)
         assert dx == pytest.approx(500 * math.tan(0.01)) and dy == pytest.approx(500 * math.tan(-0.005))
     finally:
         node.destroy_node()
@@ -300,14 +301,16 @@ def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:
 
         node.tracker.update = spy
         for t, pan in ((0.95, 0.0), (1.05, 0.01), (1.15, 0.02)):
-            node._on_joint_state(JointState(header=header(t), name=["pan", "tilt"], position=[pan, 0.0]))
+            node.inputs.on_joint_state(JointState(
+                header=header(t), name=["pan", "tilt"], position=[pan, 0.0]))
         feed(node, scene(100, 96), 1.05)
         feed(node, scene(100, 96), 1.15)
         fx = (W / 2) / math.tan(math.radians(15.0))
         # pan +0.01 rad (left) per frame moves the scene right by fx * tan(0.01) pixels
         assert seen[-1][0] == pytest.approx(fx * math.tan(0.01)) and seen[-1][1] == pytest.approx(0.0)
         node.set_parameters([Parameter("ego_motion_compensation", value=False)])
-        node._on_joint_state(JointState(header=header(1.25), name=["pan", "tilt"], position=[0.03, 0.0]))
+        node.inputs.on_joint_state(JointState(
+            header=header(1.25), name=["pan", "tilt"], position=[0.03, 0.0]))
         feed(node, scene(100, 96), 1.25)
         assert seen[-1] == (0.0, 0.0)
     finally:
