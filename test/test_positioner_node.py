@@ -60,7 +60,7 @@ class Probe:
 
     def _on_diag(self, msg: DiagnosticArray) -> None:
         with contextlib.suppress(MessageError):
-            self.diag = status_values(msg, "swir_tracker/positioner")
+            self.diag = status_values(msg, "positioner")
 
     def run(self, seconds: float, error: tuple[float, float] | None = None, state: TrackState | None = None):
         end = time.monotonic() + seconds

@@ -9,6 +9,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from sensor_msgs.msg import Image, JointState, RegionOfInterest
 from std_msgs.msg import UInt32
+from vision_msgs.msg import Detection2DArray
 from visualization_msgs.msg import MarkerArray
 
 from msg_adapters.acquisition import (
@@ -19,6 +20,7 @@ from msg_adapters.acquisition import (
     tracks_to_markers,
 )
 from msg_adapters.camera_info import intrinsics_from_fov
+from msg_adapters.detections import Detected, detections_msg
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_roi, ego_shift
 from msg_adapters.image import image_to_numpy
@@ -40,6 +42,7 @@ from swir_tracker_ros.types import Box, TrackState
 
 NODE_NAME = "acquisition"
 MOT_PREFIX = "mot."
+PERSON = "person"  # the class of every detection: the detectors find pedestrians (docs/acquisition.md)
 
 
 PARAMS_FILE = ParamsFile(
@@ -74,6 +77,9 @@ class AcquisitionNode(Node):
         self.pub_candidates = self.create_publisher(MarkerArray, topics.ACQUISITION_CANDIDATES, output)
         self.pub_init = self.create_publisher(RegionOfInterest, topics.TRACK_INIT, output)
         self.pub_debug = self.create_publisher(Image, topics.ACQUISITION_DEBUG_IMAGE, output)
+        self.pub_detections = self.create_publisher(Detection2DArray, topics.ACQUISITION_DETECTIONS, output)
+        self.pub_track_detections = self.create_publisher(
+            Detection2DArray, topics.ACQUISITION_TRACK_DETECTIONS, output)
         self.size = (0, 0)
         self.create_subscription(Image, self.params.image_topic, self._guard(self._on_image),
                                  profile(topics.LATEST))
@@ -131,6 +137,11 @@ class AcquisitionNode(Node):
                     self.target_app = v.appearance
         boxes = [TrackBox(t.id, t.box, t.status.value) for t in tracks]
         self.pub_tracks.publish(tracks_to_markers(boxes, hdr))
+        # vision_msgs (issue 39): the detector's boxes (class person, its score) and the tracks (class their
+        # life-cycle status, score the fraction of frames they were detected in, id the track ID)
+        self.pub_detections.publish(detections_msg([Detected(d.box, PERSON, d.score) for d in dets], hdr))
+        self.pub_track_detections.publish(detections_msg(
+            [Detected(t.box, t.status.value, t.hits / max(t.age, 1), str(t.id)) for t in tracks], hdr))
         candidates: list[TrackBox] = []
         if self.tracker_state is TrackState.LOST and self.target_app is not None:
             by_id = {v.id: v for v in self.views}

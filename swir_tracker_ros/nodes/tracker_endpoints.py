@@ -59,6 +59,11 @@ ENDPOINTS: tuple[Endpoint, ...] = (
     Endpoint(topics.TRACK_CANCEL, topics.SERVICE_TYPES[topics.TRACK_CANCEL], "service", "",
              "stop tracking; state -> `idle`"),
     Endpoint(topics.TRACK_BOX, topics.TYPES[topics.TRACK_BOX], "out", "reliable, 10", _BOX),
+    Endpoint(topics.TRACK_DETECTIONS, topics.TYPES[topics.TRACK_DETECTIONS], "out", "reliable, 10",
+             "every processed frame, with track/box: one Detection2D while `tracking` / `occluded` (bbox "
+             "centre and size in pixels, theta 0; one hypothesis: class_id the state, score the "
+             "correlation peak in [0, 1]; id the track's number, new at each start), none while `idle` / "
+             "`lost`; the image's header (vision_msgs convention)"),
     Endpoint(topics.PAN_TILT_ERROR, topics.TYPES[topics.PAN_TILT_ERROR], "out", "reliable, 10",
              "x = pan error, y = tilt error (rad), z = 0; only while `tracking` / `occluded`"),
     Endpoint(topics.TARGET_RATE, topics.TYPES[topics.TARGET_RATE], "out", "reliable, 10",
@@ -79,7 +84,8 @@ ENDPOINTS: tuple[Endpoint, ...] = (
     Endpoint(topics.transport_topic(topics.TRACK_DEBUG_IMAGE, "compressed"), IMAGE_TYPES["compressed"], "out",
              "reliable, 1", "the same picture as JPEG (`debug_jpeg_quality`), only while someone subscribes"),
     Endpoint(topics.DIAGNOSTICS, topics.TYPES[topics.DIAGNOSTICS], "out", "reliable, 10",
-             "every `diagnostics_period_s`: status `swir_tracker/tracker_node`, hardware_id the node's full "
+             "every `diagnostics_period_s`: status `<node full name>: tracker_node` (e.g. `/head1/tracker: "
+             "tracker_node`), hardware_id the node's full "
              "name (see below)"),
 )
 

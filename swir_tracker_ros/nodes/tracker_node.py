@@ -14,7 +14,7 @@ from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 
 from msg_adapters.compressed import compressed_to_numpy
-from msg_adapters.diagnostics import OK, STALE, WARN, diagnostic_array, status
+from msg_adapters.diagnostics import OK, STALE, WARN, diagnostic_array, node_status_name, status
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_from_roi
 from msg_adapters.image import Frame, image_to_numpy
@@ -44,7 +44,7 @@ from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
 NODE_NAME = "tracker"
-DIAG_NAME = "swir_tracker/tracker_node"
+DIAG_NAME = "tracker_node"  # the task: the status is `<node full name>: tracker_node` (node_status_name)
 TRACKER_PREFIX = "tracker."
 
 
@@ -331,8 +331,9 @@ class TrackerNode(Node):
                   **input_publishers(self, (self.image_input, self.params.camera_info_topic,
                                             self.params.joint_states_topic))}
         header = Header(stamp=self.get_clock().now().to_msg())
-        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values,
-                                                               self.get_fully_qualified_name())]))
+        name = self.get_fully_qualified_name()
+        self.pub_diag.publish(diagnostic_array(header, [status(node_status_name(name, DIAG_NAME), level, text,
+                                                               values, name)]))
 
 
 def _scale_box(box: Box, sx: float, sy: float) -> Box:
