@@ -56,6 +56,14 @@ def transport_topic(image_topic: str, transport: str) -> str:
     return image_topic if transport == "raw" else image_topic + COMPRESSED_SUFFIX
 
 
+def camera_info_topic(image_topic: str) -> str:
+    """The camera_info beside a base image topic (image_transport's sibling convention, as
+    `image_transport::getCameraInfoTopic`): `<dirname(image_topic)>/camera_info`; `/camera1/image_raw` ->
+    `/camera1/camera_info`, `image_raw` -> `camera_info`."""
+    head, sep, _ = image_topic.rpartition("/")
+    return f"{head}{sep}camera_info" if head or sep else "camera_info"
+
+
 def mouse_left_topic(image_topic: str) -> str:
     """Where rqt_image_view publishes a left click on the image `image_topic` (`<base>_mouse_left`)."""
     return image_topic + MOUSE_LEFT_SUFFIX

@@ -8,6 +8,7 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 from std_msgs.msg import Header
@@ -79,7 +80,8 @@ class TrackerNode(Node):
         # a queue of one: the executor always takes the newest frame, never a backlog
         image_type = Image if p.image_transport == "raw" else CompressedImage
         self.image_input = topics.transport_topic(p.image_topic, p.image_transport)
-        self.create_subscription(image_type, self.image_input, guard(self._on_image), profile(topics.LATEST))
+        self.create_subscription(image_type, self.image_input, guard(self._on_image), profile(topics.LATEST),
+                                 event_callbacks=SubscriptionEventCallbacks(message_lost=self._on_lost))
         self.inputs = HeadInputs(self, p, guard, self._warn)  # camera_info, joint states, ego-motion
         self.create_subscription(RegionOfInterest, topics.TRACK_INIT, guard(self._on_init), output)
         self.create_service(Trigger, topics.TRACK_CANCEL, self._on_cancel)
@@ -112,6 +114,11 @@ class TrackerNode(Node):
             return
         self._warned[kind] = (now, 0)
         self.get_logger().warning(text + (f" ({held} similar since the last warning)" if held else ""))
+
+    def _on_lost(self, info) -> None:
+        """DDS lost image samples on the way (fragments of a large frame, a full socket buffer): transport
+        loss, counted apart from frames overwritten in the depth-1 queue (`dropped_lost` on /diagnostics)."""
+        self.stats.lost += int(info.total_count_change)
 
     def _on_image(self, msg: Image | CompressedImage) -> None:
         t_recv = time.perf_counter()
@@ -324,11 +331,11 @@ class TrackerNode(Node):
         else:
             level, text = OK, "ok"
         state = self.last_result.state.value if self.last_result else TrackState.IDLE.value
-        values = {"state": state, "intrinsics": self.inputs.source, **values,
+        values = {"state": state, **self.inputs.report(), **values,
                   "selecting": "true" if self.selector.busy else "false",
                   "history_frames": len(self.selector.history),
                   "history_mb": self.selector.history.nbytes / MIB,
-                  **input_publishers(self, (self.image_input, self.params.camera_info_topic,
+                  **input_publishers(self, (self.image_input, self.inputs.camera_info_topic,
                                             self.params.joint_states_topic))}
         header = Header(stamp=self.get_clock().now().to_msg())
         name = self.get_fully_qualified_name()

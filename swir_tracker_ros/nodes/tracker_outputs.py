@@ -38,6 +38,7 @@ class TrackOutputs:
     """Publishers of `track/*` and the per-frame publishing; counts frames since the target was tracked."""
 
     def __init__(self, node: Node) -> None:
+        self.node = node
         output, debug = profile(topics.RELIABLE), profile(topics.DEBUG_IMAGE)
         self.box = node.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
         self.error = node.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
@@ -68,10 +69,11 @@ class TrackOutputs:
         self.detections.publish(track_detections(result if active else None, header, str(self.tracks)))
         if active:
             pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
-            self.error.publish(pan_tilt_to_msg(pan, tilt, header))
+            angles = Header(stamp=header.stamp, frame_id=self.node.params.angles_frame_id)
+            self.error.publish(pan_tilt_to_msg(pan, tilt, angles))
             if motion is not None:
                 rate = target_rate(result.box.cx, result.box.cy, result.velocity, motion[0], intr, motion[1])
-                self.rate.publish(pan_tilt_to_msg(*rate, header))
+                self.rate.publish(pan_tilt_to_msg(*rate, angles))
         self.publish_state(header, result, intr.width, intr.height)
         for marker in track_markers(result, header):
             self.image_markers.publish(marker)
