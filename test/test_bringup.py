@@ -386,3 +386,31 @@ def test_docs_build_both_packages_as_the_readme_says() -> None:
     for text in (readme, demo):
         assert paths in text and "colcon build --base-paths $PKGS" in text
         assert "--packages-select" not in text
+
+
+def test_managed_bridge_of_the_plan_is_configured_and_activated(processes: ProcessSet, camera: Camera,
+                                                                tmp_path: Path) -> None:
+    """managed:=true (issue 39, item 6): the plan's bridge is a lifecycle node; driven through the plan's
+    transitions (what the launch file's events do, and the printed plan's `ros2 lifecycle set`), it opens the
+    head and publishes joint states where robot_state_publisher reads them."""
+    from lifecycle_msgs.srv import ChangeState
+
+    values = {"namespace": "head1", "port": start_sim(processes, tmp_path, "managed"), "address": "3",
+              "managed": "true", "pan_joint": "head1_pan", "tilt_joint": "head1_tilt"}
+    spec = next(s for s in bringup_nodes(BringupArgs.from_text(values), str(REPO))
+                if s.executable == "positioner_bridge")
+    assert spec.lifecycle == ("configure", "activate")
+    bridge = processes.start(spec.executable, *spec.command(str(BIN))[1:])
+    client = camera.node.create_client(ChangeState, "/head1/positioner_bridge/change_state")
+    assert camera.spin_until(client.service_is_ready, 60.0), processes.log(bridge)
+    camera.spin_until(lambda: False, 1.0)
+    assert not camera.joints, "an unconfigured lifecycle bridge must not publish joint states"
+    for transition in spec.lifecycle:
+        future = client.call_async(ChangeState.Request(transition=Transition(
+            id={"configure": Transition.TRANSITION_CONFIGURE, "activate": Transition.TRANSITION_ACTIVATE}[
+                transition])))
+        assert camera.spin_until(future.done, 20.0) and future.result().success, (transition,
+                                                                                 processes.log(bridge))
+    assert camera.spin_until(lambda: len(camera.joints) > 3, 20.0), processes.log(bridge)
+    assert camera.joint_names["/head1"] >= {"head1_pan", "head1_tilt"}
+    assert bridge.poll() is None
