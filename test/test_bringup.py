@@ -414,3 +414,9 @@ def test_managed_bridge_of_the_plan_is_configured_and_activated(processes: Proce
     assert camera.spin_until(lambda: len(camera.joints) > 3, 20.0), processes.log(bridge)
     assert camera.joint_names["/head1"] >= {"head1_pan", "head1_tilt"}
     assert bridge.poll() is None
+
+
+def test_every_launch_argument_is_documented() -> None:
+    table = (REPO / "docs" / "bringup.md").read_text()
+    missing = [a.name for a in ARGUMENTS if f"`{a.name}`" not in table]
+    assert not missing, missing
