@@ -29,6 +29,7 @@ setup(
         (f"share/{PACKAGE}/params", glob("params/*.yaml")),
         (f"share/{PACKAGE}/launch", glob("launch/*.launch.py")),
         (f"share/{PACKAGE}/config", glob("config/*.xml")),
+        (f"share/{PACKAGE}/urdf", glob("urdf/*")),
     ],
     install_requires=["setuptools"],
     zip_safe=True,

@@ -51,7 +51,7 @@ TARGET = 32
 # Fast DDS's built-in shared-memory segment (512 KiB) is smaller than one 640x512 mono16 frame (640 KiB),
 # so such frames travel as UDP fragments, and best-effort samples are lost whenever a fragment overflows
 # the socket buffer. A shared-memory transport with a larger segment carries them whole.
-SHM_PROFILE_FILE = REPO / "config" / "fastdds_shm_large.xml"
+SHM_PROFILE_FILE = REPO / "config" / "fastdds_shm_udp.xml"
 
 
 class SyntheticSequence:
@@ -116,7 +116,8 @@ def main() -> int:
     ap.add_argument("--height", type=int, default=512)
     ap.add_argument("--executable", default=str(Path(sys.prefix) / "bin" / "tracker"))
     ap.add_argument("--transport", choices=("shm", "default"), default="shm",
-                    help="shm: Fast DDS shared memory with a 16 MiB segment (config/fastdds_shm_large.xml); "
+                    help="shm: Fast DDS shared memory with a 16 MiB segment, and UDP "
+                    "(config/fastdds_shm_udp.xml); "
                          "default: Fast DDS built-in transports")
     args = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="node_latency_"))

@@ -49,7 +49,7 @@ def _graph(context, *_args, **_kwargs):
 
         tracker_overrides["init_box"] = initial_target_box(arg["scene"], int(arg["seed"]))
     pelco_sim = os.path.join(get_package_prefix(PACKAGE), "lib", PACKAGE, "pelco_sim")  # not a ROS node
-    profile = os.path.join(get_package_share_directory(PACKAGE), "config", "fastdds_shm_large.xml")
+    profile = os.path.join(get_package_share_directory(PACKAGE), "config", "fastdds_shm_udp.xml")
     env = ([SetEnvironmentVariable("FASTRTPS_DEFAULT_PROFILES_FILE", profile)]
            if os.path.isfile(profile) and "FASTRTPS_DEFAULT_PROFILES_FILE" not in os.environ else [])
     return [

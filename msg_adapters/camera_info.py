@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -16,9 +17,15 @@ if TYPE_CHECKING:
     from std_msgs.msg import Header
 
 
+# The distortion models whose D the error undoes (cv2.undistortPoints), with their number of coefficients.
+DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8}
+
+
 @dataclass(frozen=True)
 class Intrinsics:
-    """Pinhole intrinsics in pixels for an image of `width` x `height` (K = [fx 0 cx; 0 fy cy; 0 0 1])."""
+    """Pinhole intrinsics in pixels for an image of `width` x `height` (K = [fx 0 cx; 0 fy cy; 0 0 1]) and
+    the lens distortion D of CameraInfo's `plumb_bob` (k1, k2, p1, p2, k3) or `rational_polynomial` (8
+    coefficients) model, in normalised coordinates (so unchanged by resizing or zoom scaling); () = none."""
 
     fx: float
     fy: float
@@ -26,13 +33,24 @@ class Intrinsics:
     cy: float
     width: int
     height: int
+    distortion: tuple[float, ...] = ()
 
     def scaled_to(self, width: int, height: int) -> Intrinsics:
         """The same optics for an image resized to width x height (binning, decimation)."""
         if (width, height) == (self.width, self.height):
             return self
         sx, sy = width / self.width, height / self.height
-        return Intrinsics(self.fx * sx, self.fy * sy, self.cx * sx, self.cy * sy, width, height)
+        return dataclasses.replace(self, fx=self.fx * sx, fy=self.fy * sy, cx=self.cx * sx, cy=self.cy * sy,
+                                   width=width, height=height)
+
+    def zoomed(self, scale: float) -> Intrinsics:
+        """The focal lengths multiplied by `scale` (a zoom lens at another focal length; principal point and
+        distortion kept)."""
+        return self if scale == 1.0 else dataclasses.replace(self, fx=self.fx * scale, fy=self.fy * scale)
+
+    @property
+    def distorted(self) -> bool:
+        return any(v != 0.0 for v in self.distortion)
 
 
 def intrinsics_from_fov(width: int, height: int, hfov_deg: float, vfov_deg: float = 0.0) -> Intrinsics:
@@ -64,7 +82,8 @@ def intrinsics_from_matrix(k: Sequence[float], width: int, height: int) -> Intri
 
 
 def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
-    """fx, fy, cx, cy from `CameraInfo.k`, corrected for `binning_x/y` and `roi` (REP-104).
+    """fx, fy, cx, cy from `CameraInfo.k`, corrected for `binning_x/y` and `roi` (REP-104), and the
+    distortion D (plumb_bob or rational_polynomial; all-zero D: none).
 
     Raises `MessageError` for an uncalibrated (all-zero) K, non-finite or non-positive focal lengths
     or a zero image size.
@@ -75,6 +94,7 @@ def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
         bx, by = max(int(msg.binning_x), 1), max(int(msg.binning_y), 1)
         roi_x, roi_y = int(msg.roi.x_offset), int(msg.roi.y_offset)
         roi_w, roi_h = int(msg.roi.width), int(msg.roi.height)
+        model, d = str(msg.distortion_model), tuple(float(v) for v in msg.d)
     except (AttributeError, TypeError, ValueError) as exc:
         raise MessageError(f"CameraInfo fields are not readable ({exc})") from exc
     if len(k) != 9:
@@ -93,21 +113,30 @@ def intrinsics_from_camera_info(msg: CameraInfo) -> Intrinsics:
     fx_out, fy_out = fx / bx, fy / by
     if not (fx_out > 0 and fy_out > 0):  # a denormal focal length underflows to zero once binned
         raise MessageError(f"CameraInfo.k focal lengths vanish after binning {bx}x{by}: fx={fx}, fy={fy}")
-    return Intrinsics(fx_out, fy_out, cx / bx, cy / by, out_w, out_h)
+    if any(v != 0.0 for v in d):
+        if model not in DISTORTION_MODELS or len(d) != DISTORTION_MODELS[model]:
+            raise MessageError(f"CameraInfo distortion model {model!r} with {len(d)} coefficients is not "
+                               f"one of {DISTORTION_MODELS} (coefficients, by model)")
+        if not all(math.isfinite(v) for v in d):
+            raise MessageError(f"CameraInfo.d has non-finite coefficients: {d}")
+    else:
+        d = ()
+    return Intrinsics(fx_out, fy_out, cx / bx, cy / by, out_w, out_h, d)
 
 
 def camera_info_from_intrinsics(intr: Intrinsics, header: Header | None = None, *,
                                 binning: tuple[int, int] = (1, 1), roi_offset: tuple[int, int] = (0, 0),
                                 sensor_size: tuple[int, int] | None = None,
                                 distortion_model: str = "plumb_bob",
-                                d: Sequence[float] = (0.0,) * 5, backend: Backend = RCLPY) -> CameraInfo:
+                                d: Sequence[float] | None = None, backend: Backend = RCLPY) -> CameraInfo:
     """The CameraInfo of an image with intrinsics `intr`: the inverse of `intrinsics_from_camera_info`.
 
     REP-104: the message describes the full sensor (`sensor_size`, default: exactly the ROI) with
     K = [fx bx, 0, cx bx + x0; 0, fy by, cy by + y0; 0, 0, 1], the image being the ROI at `roi_offset`
     (x0, y0) of `intr.width * bx` x `intr.height * by` sensor pixels, binned `binning` = (bx, by).
     A ROI covering the whole sensor is written as the all-zero ROI, no binning as binning 0.
-    R = I and P = [K | 0] (a monocular camera whose images need no rectification); `d` is copied.
+    R = I and P = [K | 0] (a monocular camera whose images need no rectification); `d` is copied (default:
+    the intrinsics' own distortion, or five zeros).
     Raises `MessageError` for invalid intrinsics, binning < 1, a negative offset or a ROI off the sensor.
     """
     bx, by = (int(b) for b in binning)
@@ -127,6 +156,8 @@ def camera_info_from_intrinsics(intr: Intrinsics, header: Header | None = None, 
     if header is None:
         header = backend.cls(HEADER)(stamp=backend.cls(TIME)(sec=0, nanosec=0), frame_id="")
     fx, fy, cx, cy = intr.fx * bx, intr.fy * by, intr.cx * bx + x0, intr.cy * by + y0
+    if d is None:
+        d = intr.distortion or (0.0,) * 5
     return backend.cls(CAMERA_INFO)(
         header=header, width=full_w, height=full_h, distortion_model=distortion_model, d=backend.f64(d),
         k=backend.f64([fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]),

@@ -32,6 +32,13 @@ def status(name: str, level: int | bytes, message: str, values: Mapping[str, obj
                             values=[KeyValue(key=str(k), value=_text(v)) for k, v in values.items()])
 
 
+def node_status_name(node_name: str, task: str) -> str:
+    """`<node's full name>: <task>`, e.g. `/head1/tracker: tracker_node`: diagnostic_updater's
+    `<node>: <task>` with the namespace, so that the statuses of two heads differ (rqt_robot_monitor and
+    the aggregator key on the name; issue 39)."""
+    return f"{node_name}: {task}"
+
+
 def diagnostic_array(header: Header, statuses: list[DiagnosticStatus]) -> DiagnosticArray:
     return DiagnosticArray(header=header, status=list(statuses))
 
@@ -45,8 +52,9 @@ def statuses(msg: DiagnosticArray) -> list[tuple[str, dict[str, str]]]:
 
 
 def status_values(msg: DiagnosticArray, name: str) -> dict[str, str]:
-    """The values of the status called `name`; `MessageError` if the array has no such status."""
+    """The values of the status called `name`, or of the first whose name is `<node>: name` (a task of any
+    node, `node_status_name`); `MessageError` if the array has no such status."""
     for st_name, values in statuses(msg):
-        if st_name == name:
+        if st_name == name or st_name.endswith(f": {name}"):
             return values
     raise MessageError(f"DiagnosticArray.status has no entry named {name!r}")

@@ -6,6 +6,9 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import cv2
+import numpy as np
+
 from msg_adapters.backend import (
     HEADER,
     POINT32,
@@ -99,8 +102,15 @@ def pan_tilt_error(u: float, v: float, intr: Intrinsics) -> tuple[float, float]:
     """Angular error (rad) of pixel (u, v) from the optical axis, REP-103 head frame.
 
     pan_error = atan2(cx - u, fx) (positive: target left of the axis, turn left / counter-clockwise),
-    tilt_error = atan2(cy - v, fy) (positive: target above the axis, tilt up).
+    tilt_error = atan2(cy - v, fy) (positive: target above the axis, tilt up). With a lens distortion D the
+    pixel is first undistorted (cv2.undistortPoints: the normalised ray (x, y) of the pixel), and
+    pan_error = atan(-x), tilt_error = atan(-y): the same formulas for an ideal pinhole.
     """
+    if intr.distorted:
+        k = np.array([[intr.fx, 0.0, intr.cx], [0.0, intr.fy, intr.cy], [0.0, 0.0, 1.0]])
+        ray = cv2.undistortPoints(np.array([[[u, v]]], dtype=np.float64), k, np.array(intr.distortion))
+        x, y = float(ray[0, 0, 0]), float(ray[0, 0, 1])
+        return math.atan(-x), math.atan(-y)
     return math.atan2(intr.cx - u, intr.fx), math.atan2(intr.cy - v, intr.fy)
 
 

@@ -54,20 +54,35 @@ def _value(seq, i: int, field: str, joint: str) -> float:
     return out
 
 
-def joint_state_to_sample(msg: JointState) -> PanTiltSample:
-    """Pan/tilt positions (required) and velocities (0 when the message carries none)."""
+def joint_state_to_sample(msg: JointState, pan_joint: str = PAN, tilt_joint: str = TILT) -> PanTiltSample:
+    """Pan/tilt positions (required) and velocities (0 when the message carries none) of the joints named
+    `pan_joint` and `tilt_joint` (the bring-up's joint names)."""
     names = getattr(msg, "name", None)
     if names is None:
         raise MessageError("JointState.name is missing")
-    ip, it = _index(names, PAN), _index(names, TILT)
-    pan, tilt = _value(msg.position, ip, "position", PAN), _value(msg.position, it, "position", TILT)
+    ip, it = _index(names, pan_joint), _index(names, tilt_joint)
+    pan = _value(msg.position, ip, "position", pan_joint)
+    tilt = _value(msg.position, it, "position", tilt_joint)
     vel = list(msg.velocity)
-    pan_v = _value(vel, ip, "velocity", PAN) if vel else 0.0
-    tilt_v = _value(vel, it, "velocity", TILT) if vel else 0.0
+    pan_v = _value(vel, ip, "velocity", pan_joint) if vel else 0.0
+    tilt_v = _value(vel, it, "velocity", tilt_joint) if vel else 0.0
     return PanTiltSample(pan, tilt, pan_v, tilt_v, stamp_to_seconds(msg.header.stamp))
 
 
-def joint_state_to_pan_tilt(msg: JointState) -> tuple[float, float, float]:
-    """(pan rad, tilt rad, stamp seconds) of a /positioner/joint_states message."""
-    s = joint_state_to_sample(msg)
+def joint_state_to_pan_tilt(msg: JointState, pan_joint: str = PAN, tilt_joint: str = TILT
+                            ) -> tuple[float, float, float]:
+    """(pan rad, tilt rad, stamp seconds) of a joint-states message (joints `pan_joint`, `tilt_joint`)."""
+    s = joint_state_to_sample(msg, pan_joint, tilt_joint)
     return s.pan, s.tilt, s.stamp
+
+
+def joint_position(msg: JointState, joint: str) -> float | None:
+    """The finite position of `joint` in a joint-states message, or None when it carries none (e.g. the
+    zoom joint of a head that does not report its zoom)."""
+    names = list(getattr(msg, "name", None) or [])
+    if joint not in names:
+        return None
+    i = names.index(joint)
+    if i >= len(msg.position) or not math.isfinite(float(msg.position[i])):
+        return None
+    return float(msg.position[i])

@@ -28,6 +28,7 @@ TRACK_STATE = "track/state"
 TRACK_STATE_TYPED = "track/state_typed"
 TRACK_MARKERS = "track/image_markers"
 TRACK_DEBUG_IMAGE = "track/debug_image"
+TRACK_DETECTIONS = "track/detections"  # vision_msgs/Detection2DArray: the tracked box (issue 39)
 GROUND_TRUTH_BOX = "ground_truth/box"
 GROUND_TRUTH_STATE = "ground_truth/state"
 GROUND_TRUTH_OCCLUDED = "ground_truth/occluded"
@@ -36,6 +37,8 @@ ACQUISITION_TRACKS = "acquisition/tracks"
 ACQUISITION_CANDIDATES = "acquisition/candidates"
 ACQUISITION_SELECT = "acquisition/select"
 ACQUISITION_DEBUG_IMAGE = "acquisition/debug_image"
+ACQUISITION_DETECTIONS = "acquisition/detections"  # vision_msgs/Detection2DArray: the detector's boxes
+ACQUISITION_TRACK_DETECTIONS = "acquisition/track_detections"  # the same type: the associated tracks
 # Graph-wide names (absolute): every node's health, and the simulated clock.
 DIAGNOSTICS = "/diagnostics"
 CLOCK = "/clock"
@@ -51,6 +54,14 @@ def transport_topic(image_topic: str, transport: str) -> str:
     if transport not in TRANSPORTS:
         raise ValueError(f"image transport {transport!r} is not one of {TRANSPORTS}")
     return image_topic if transport == "raw" else image_topic + COMPRESSED_SUFFIX
+
+
+def camera_info_topic(image_topic: str) -> str:
+    """The camera_info beside a base image topic (image_transport's sibling convention, as
+    `image_transport::getCameraInfoTopic`): `<dirname(image_topic)>/camera_info`; `/camera1/image_raw` ->
+    `/camera1/camera_info`, `image_raw` -> `camera_info`."""
+    head, sep, _ = image_topic.rpartition("/")
+    return f"{head}{sep}camera_info" if head or sep else "camera_info"
 
 
 def mouse_left_topic(image_topic: str) -> str:
@@ -77,6 +88,7 @@ _TYPES: dict[str, str] = {
     TRACK_STATE_TYPED: "swir_tracker_interfaces/msg/TrackState",
     TRACK_MARKERS: "visualization_msgs/msg/ImageMarker",
     TRACK_DEBUG_IMAGE: "sensor_msgs/msg/Image",
+    TRACK_DETECTIONS: "vision_msgs/msg/Detection2DArray",
     DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray",
     GROUND_TRUTH_BOX: "geometry_msgs/msg/PolygonStamped",
     GROUND_TRUTH_STATE: "diagnostic_msgs/msg/DiagnosticArray",
@@ -85,6 +97,8 @@ _TYPES: dict[str, str] = {
     ACQUISITION_CANDIDATES: "visualization_msgs/msg/MarkerArray",
     ACQUISITION_SELECT: "std_msgs/msg/UInt32",
     ACQUISITION_DEBUG_IMAGE: "sensor_msgs/msg/Image",
+    ACQUISITION_DETECTIONS: "vision_msgs/msg/Detection2DArray",
+    ACQUISITION_TRACK_DETECTIONS: "vision_msgs/msg/Detection2DArray",
     CLOCK: "rosgraph_msgs/msg/Clock",
 }
 # By the relative name and by the name in the root namespace (what a bag of a root-namespace head holds).

@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 
+import numpy as np
 import pytest
 from conftest import REPO, ProcessSet, SpinningProbe, ros_probe
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -15,9 +16,11 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Image, RegionOfInterest
 from std_msgs.msg import UInt32
+from vision_msgs.msg import Detection2DArray
 from visualization_msgs.msg import MarkerArray
 
 from msg_adapters.acquisition import CANDIDATES_NS, tracks_from_markers
+from msg_adapters.detections import detections_from_msg
 from msg_adapters.geometry import box_from_roi
 from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header, stamp_to_seconds
@@ -42,6 +45,10 @@ class Probe(SpinningProbe):
         n.create_subscription(MarkerArray, "/acquisition/tracks", self._on_tracks, 10)
         n.create_subscription(MarkerArray, "/acquisition/candidates", self.candidates.append, 10)
         n.create_subscription(RegionOfInterest, "/track/init", self.inits.append, 10)
+        self.detections: dict[tuple[str, float], Detection2DArray] = {}  # (topic, stamp) -> message
+        for topic in ("/acquisition/detections", "/acquisition/track_detections"):
+            n.create_subscription(Detection2DArray, topic, lambda m, t=topic: self.detections.__setitem__(
+                (t, stamp_to_seconds(m.header.stamp)), m), 10)
         self.t = time.time()
 
     def _on_tracks(self, msg: MarkerArray) -> None:
@@ -84,6 +91,18 @@ def test_select_publishes_the_track_box_on_track_init(processes: ProcessSet, pro
             break
     assert len(tracks) == 1, processes.log(proc)
     chosen = tracks[0]
+    # vision_msgs (issue 39): the same frame's tracks as Detection2DArray (id the track ID, class the status),
+    # and the detector's own boxes (class person) on acquisition/detections
+    stamp = max(probe.tracks)
+    key, det_key = ("/acquisition/track_detections", stamp), ("/acquisition/detections", stamp)
+    assert probe.spin_until(lambda: key in probe.detections and det_key in probe.detections, 2.0)
+    as_detections = detections_from_msg(probe.detections[key])
+    assert [(d.id, d.class_id) for d in as_detections] == [(str(chosen.id), chosen.label)]
+    assert np.allclose(as_detections[0].box.as_tuple(), chosen.box.as_tuple(), atol=1e-3)
+    assert 0.0 < as_detections[0].score <= 1.0
+    found = detections_from_msg(probe.detections[det_key])
+    assert found and all(d.class_id == "person" for d in found)
+    assert max(d.box.iou(chosen.box) for d in found) > 0.5
     probe.select.publish(UInt32(data=chosen.id))
     assert probe.spin_until(lambda: probe.inits, 5.0), processes.log(proc)
     roi = box_from_roi(probe.inits[0])

@@ -62,6 +62,8 @@ def test_install_layout(prefix: Path) -> None:
         path = prefix / "lib" / PKG / exe
         assert path.is_file() and os.access(path, os.X_OK), path
     assert (prefix / "share" / PKG / "launch" / "bringup.launch.py").is_file()
+    assert (prefix / "share" / PKG / "urdf" / "swir_head.urdf.template").is_file()  # bring-up fills it
+    assert (prefix / "share" / PKG / "config" / "fastdds_shm_udp.xml").is_file()
     ifaces = prefix.parent / IFACES
     assert (ifaces / "share" / IFACES / "srv" / "SelectTarget.srv").is_file()
     assert (ifaces / "share" / "ament_index" / "resource_index" / "packages" / IFACES).is_file()

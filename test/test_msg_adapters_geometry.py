@@ -6,6 +6,8 @@ from __future__ import annotations
 import contextlib
 import math
 
+import cv2
+import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point32, PolygonStamped
@@ -123,7 +125,9 @@ def test_camera_info_builder_inverts_the_parser_with_binning_and_roi() -> None:
     assert list(plain.p) == [800.0, 0.0, 300.25, 0.0, 0.0, 805.0, 250.5, 0.0, 0.0, 0.0, 1.0, 0.0]
     assert list(plain.d) == [0.1, -0.01, 0.0, 0.0, 0.002] and plain.distortion_model == "plumb_bob"
     assert stamp_to_seconds(plain.header.stamp) == 2.0
-    assert intrinsics_from_camera_info(plain) == image
+    assert intrinsics_from_camera_info(plain) == Intrinsics(800.0, 805.0, 300.25, 250.5, 640, 512,
+                                                            (0.1, -0.01, 0.0, 0.0, 0.002))
+    assert list(camera_info_from_intrinsics(intrinsics_from_camera_info(plain)).d) == list(plain.d)
     # A 2x2-binned 640x512 window at (100, 40) of a 1920x1200 sensor: K and the ROI are in sensor pixels.
     cut = camera_info_from_intrinsics(image, binning=(2, 2), roi_offset=(100, 40), sensor_size=(1920, 1200))
     assert (cut.width, cut.height, cut.binning_x, cut.binning_y) == (1920, 1200, 2, 2)
@@ -228,3 +232,26 @@ def test_fuzzed_roi_only_message_error(x: int, y: int, w: int, h: int) -> None:
         assert w == 0 or h == 0
         return
     assert box.is_valid()
+
+
+def test_pan_tilt_error_undoes_the_lens_distortion() -> None:
+    """Issue 39: a plumb_bob D is applied to the error. A ray at known angles is projected through a lens with
+    barrel distortion (cv2.projectPoints); the error of that pixel is the ray's angles again, whereas the
+    pinhole formula misses them by more than a pixel's angle at the image edge."""
+    d = (-0.25, 0.08, 0.001, -0.0005, 0.0)
+    ideal = Intrinsics(800.0, 805.0, 320.0, 256.0, 640, 512)
+    lens = Intrinsics(800.0, 805.0, 320.0, 256.0, 640, 512, d)
+    pan, tilt = 0.3, -0.2  # left and down of the axis: ray (x, y, 1) = (-tan pan, -tan tilt, 1) in optics
+    k = np.array([[800.0, 0.0, 320.0], [0.0, 805.0, 256.0], [0.0, 0.0, 1.0]])
+    pixel, _ = cv2.projectPoints(np.array([[-math.tan(pan), -math.tan(tilt), 1.0]]), np.zeros(3), np.zeros(3),
+                                 k, np.array(d))
+    u, v = pixel[0, 0]
+    assert pan_tilt_error(u, v, lens) == pytest.approx((pan, tilt), abs=2e-4)
+    naive = pan_tilt_error(u, v, ideal)
+    assert abs(naive[0] - pan) > 5 / 800 and abs(naive[1] - tilt) > 1 / 805
+    assert pan_tilt_error(400.0, 200.0, ideal) == (math.atan2(-80.0, 800.0), math.atan2(56.0, 805.0))
+    assert lens.scaled_to(320, 256).distortion == d and lens.zoomed(2.0).fx == 1600.0
+    msg = camera_info_from_intrinsics(lens)
+    msg.distortion_model = "equidistant"  # a model whose D the error cannot undo: refused, not ignored
+    with pytest.raises(MessageError, match="equidistant"):
+        intrinsics_from_camera_info(msg)

@@ -52,6 +52,7 @@ class Probe:
         self.state_pub = self.node.create_publisher(DiagnosticArray, "/track/state", 10)
         self.joints: list = []
         self.diag: dict[str, str] = {}
+        self.diag_ids: dict[str, str] = {}  # status name -> hardware_id
         self.node.create_subscription(JointState, "/positioner/joint_states",
                                       lambda m: self.joints.append(joint_state_to_sample(m)), 10)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
@@ -59,8 +60,9 @@ class Probe:
         self.executor.add_node(self.node)
 
     def _on_diag(self, msg: DiagnosticArray) -> None:
+        self.diag_ids.update({st.name: st.hardware_id for st in msg.status})
         with contextlib.suppress(MessageError):
-            self.diag = status_values(msg, "swir_tracker/positioner")
+            self.diag = status_values(msg, "positioner")
 
     def run(self, seconds: float, error: tuple[float, float] | None = None, state: TrackState | None = None):
         end = time.monotonic() + seconds
@@ -190,6 +192,9 @@ def test_socket_url_with_corrupted_bytes(processes, tmp_path, probe) -> None:
     assert probe.until(lambda: velocity_now(trace)[0] < 0.0, 20.0, err), processes.log(bridge)
     assert probe.until(lambda: int(probe.diag.get("checksum_errors", "0")) > 0 and len(probe.joints) > 5,
                        15.0, err), probe.diag
+    # issue 39: the status carries the node's full name, hardware_id the address AND the port (two heads at
+    # address 1 on their own lines differ)
+    assert probe.diag_ids.get("/positioner_bridge: positioner") == f"pelco-d:1@{url}", probe.diag_ids
     pan_v, tilt_v = velocity_now(trace)
     assert pan_v < 0.0 and tilt_v < 0.0  # right and down
     assert bridge.poll() is None

@@ -10,6 +10,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 from conftest import REPO, ProcessSet, SpinningProbe, ros_probe, wait_for
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point, PointStamped, PolygonStamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -17,9 +18,11 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 from test_tracker_node_unit import TW, H, W, scene
+from vision_msgs.msg import Detection2DArray
 from visualization_msgs.msg import ImageMarker
 
 from msg_adapters.compressed import numpy_to_compressed
+from msg_adapters.detections import Detected, detections_from_msg
 from msg_adapters.geometry import box_from_polygon
 from msg_adapters.image import numpy_to_image
 from msg_adapters.image_marker import marker_box
@@ -70,13 +73,18 @@ class Head:
         self.markers: dict[float, Box | None] = {}
         self.truth: dict[float, Box] = {}
         self.box_frame_ids: set[str] = set()
+        self.detections: dict[float, tuple[str, list[Detected]]] = {}  # stamp -> (frame_id, detections)
         node.create_subscription(PolygonStamped, f"{ns}/track/box", self._on_box, 10)
+        node.create_subscription(Detection2DArray, f"{ns}/track/detections", self._on_detections, 10)
         node.create_subscription(TrackStateMsg, f"{ns}/track/state_typed", self._on_state, 10)
         node.create_subscription(ImageMarker, f"{ns}/track/image_markers", self._on_marker, 10)
 
     def _on_box(self, msg: PolygonStamped) -> None:
         self.boxes[stamp_to_seconds(msg.header.stamp)] = box_from_polygon(msg)
         self.box_frame_ids.add(msg.header.frame_id)
+
+    def _on_detections(self, msg: Detection2DArray) -> None:
+        self.detections[stamp_to_seconds(msg.header.stamp)] = (msg.header.frame_id, detections_from_msg(msg))
 
     def _on_state(self, msg: TrackStateMsg) -> None:
         self.states[stamp_to_seconds(msg.header.stamp)] = typed_state_from_msg(msg)
@@ -99,6 +107,11 @@ class Probe(SpinningProbe):
         self.executor = SingleThreadedExecutor(context=ctx)
         self.executor.add_node(self.node)
         self.heads: dict[str, Head] = {}
+        self.diagnostics: dict[str, str] = {}  # status name -> hardware_id
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
+
+    def _on_diag(self, msg: DiagnosticArray) -> None:
+        self.diagnostics.update({st.name: st.hardware_id for st in msg.status})
 
     def add(self, ns: str, **kw) -> Head:
         self.heads[ns] = Head(self.node, ns, **kw)
@@ -154,6 +167,27 @@ def test_two_namespaced_heads_track_their_own_streams(processes: ProcessSet, pro
             assert b.center_distance(head.truth[s]) < 4.0, (ns, s, b, head.truth[s])
         assert head.states[max(head.states)][0] is TrackState.TRACKING
         assert head.box_frame_ids == {"swir_optical_frame_pixels"}
+        # vision_msgs (issue 39): on every frame with a track/box, track/detections with the same box, stamp
+        # and the image's frame_id; one detection while tracking (the state as its class), none without a box
+        assert set(head.detections) >= set(head.boxes), (ns, sorted(set(head.boxes) - set(head.detections)))
+        ids = set()
+        for s, b in head.boxes.items():
+            frame_id, dets = head.detections[s]
+            assert frame_id == "swir_optical_frame"
+            if b is None:
+                assert dets == [], (ns, s, dets)
+                continue
+            assert len(dets) == 1, (ns, s, dets)
+            d = dets[0]
+            assert np.allclose(d.box.as_tuple(), b.as_tuple(), atol=1e-3), (ns, s, d.box, b)
+            assert d.class_id == head.states[s][0].value and 0.0 <= d.score <= 1.0, (ns, s, d)
+            ids.add(d.id)
+        assert ids == {"1"}, ids  # one target, one track id
+    # Issue 39: each head's status carries its node's full name; hardware_id the node (distinct per head).
+    assert probe.spin_until(lambda: all(f"{ns}/tracker: tracker_node" in probe.diagnostics for ns in paths),
+                            5.0), probe.diagnostics
+    assert {probe.diagnostics[f"{ns}/tracker: tracker_node"] for ns in paths} == {"/head1/tracker",
+                                                                                 "/head2/tracker"}
     # Every topic and service of each head's tracker, as the graph reports them, lies in its namespace but
     # the three graph-wide topics.
     for ns in paths:

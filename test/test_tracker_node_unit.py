@@ -85,7 +85,7 @@ def test_tracks_from_init_box_param_and_publishes_with_image_header(context: Con
         assert pan == pytest.approx(math.atan2(W / 2 - box.cx, fx)) and pan < 0  # target right of centre
         assert tilt == pytest.approx(math.atan2(H / 2 - box.cy, fx))  # square pixels: fy = fx
         assert cap.box[-1].header.frame_id == "swir_pixels"  # pixels, not metres in the camera frame
-        assert cap.error[-1].header.frame_id == "swir"
+        assert cap.error[-1].header.frame_id == "pan_link"  # joint angles: the head's pan frame (issue 39)
     finally:
         node.destroy_node()
 
@@ -158,16 +158,78 @@ def test_resolution_change_reinitialises_on_the_scaled_box(context: Context) -> 
 def test_ego_shift_from_joint_states_and_camera_info(context: Context) -> None:
     node, _ = make(context)
     try:
-        node._on_camera_info(camera_info_from_intrinsics(Intrinsics(500.0, 500.0, 120.0, 96.0, W, H)))
-        node._on_camera_info(CameraInfo(width=W, height=H))  # uncalibrated: ignored, previous one kept
+        node.inputs.on_camera_info(camera_info_from_intrinsics(Intrinsics(500.0, 500.0, 120.0, 96.0, W, H)))
+        node.inputs.on_camera_info(CameraInfo(width=W, height=H))  # uncalibrated: ignored, previous one kept
         for t, pan, tilt in ((0.9, 0.0, 0.0), (1.1, 0.02, -0.01)):
-            node._on_joint_state(JointState(header=header(t), name=["tilt", "pan"], position=[tilt, pan]))
-        node._on_joint_state(JointState(header=header(1.2), name=["pan"], position=[0.5]))  # ignored
-        intr = node._intrinsics(W, H)
+            node.inputs.on_joint_state(JointState(
+                header=header(t), name=["tilt", "pan"], position=[tilt, pan]))
+        node.inputs.on_joint_state(JointState(header=header(1.2), name=["pan"], position=[0.5]))  # ignored
+        intr = node.inputs.intrinsics(W, H)
         assert intr.fx == 500.0
-        assert node._ego_shift(0.9, intr) == (0.0, 0.0)
-        dx, dy = node._ego_shift(1.0, intr)  # head halfway: pan +0.01 (left), tilt -0.005 (down)
+        assert node.inputs.ego_shift(0.9, intr) == (0.0, 0.0)
+        dx, dy = node.inputs.ego_shift(1.0, intr)  # head halfway: pan +0.01 (left), tilt -0.005 (down)
         assert dx == pytest.approx(500 * math.tan(0.01)) and dy == pytest.approx(500 * math.tan(-0.005))
+    finally:
+        node.destroy_node()
+
+
+def test_camera_info_beside_the_image_topic(context: Context) -> None:
+    """Issue 39: image_topic alone moves the CameraInfo subscription beside it (image_transport's sibling
+    convention); an explicit camera_info_topic wins."""
+    node, _ = make(context, image_topic="/camera1/image_raw")
+    other, _ = make(context, image_topic="/camera1/image_raw", camera_info_topic="/calib/info")
+    try:
+        assert {s.topic_name for s in node.subscriptions} >= {"/camera1/image_raw", "/camera1/camera_info"}
+        assert "/calib/info" in {s.topic_name for s in other.subscriptions}
+        assert "/camera1/camera_info" not in {s.topic_name for s in other.subscriptions}
+    finally:
+        node.destroy_node()
+        other.destroy_node()
+
+
+def test_no_camera_info_is_said_not_silent(context: Context) -> None:
+    node, cap = make(context, camera_info_timeout_s=0.0, warn_throttle_s=0.0)
+    warnings: list[str] = []
+    node._warn = lambda kind, text: warnings.append(text)  # the inputs warn through the node
+    node.inputs._warn = node._warn
+    try:
+        feed(node, scene(100, 96), 1.0)
+        feed(node, scene(100, 96), 1.04)
+        assert any("no CameraInfo on /camera/camera_info" in w and "fallback" in w for w in warnings), \
+            warnings
+        node._publish_diagnostics()
+        values = status_values(cap.diag[-1], DIAG_NAME)
+        assert (values["camera_info_missing"], values["intrinsics"]) == ("true", "fov")
+        assert values["camera_info_topic"] == "/camera/camera_info"
+    finally:
+        node.destroy_node()
+
+
+def test_zoom_moves_the_focal_length_the_error_uses(context: Context) -> None:
+    """Issue 39: the zoom joint through `zoom_focal_scale` scales fx, fy: the same box's error shrinks as the
+    head zooms in (tele), under the joint names the bring-up gave."""
+    node, cap = make(context, init_box=[128.0, 84.0, 24.0, 24.0], fov_h_deg=30.0,
+                     ego_motion_compensation=False, zoom_focal_scale=[0.0, 1.0, 0.5, 2.0, 1.0, 4.0],
+                     pan_joint="head1_pan", tilt_joint="head1_tilt", zoom_joint="head1_zoom")
+    fx = (W / 2) / math.tan(math.radians(15.0))
+
+    def joints(t: float, zoom: float, names=("head1_pan", "head1_tilt", "head1_zoom")) -> None:
+        node.inputs.on_joint_state(JointState(header=header(t), name=list(names), position=[0.0, 0.0, zoom]))
+
+    try:
+        errors = []
+        for t, zoom in ((1.0, 0.0), (1.04, 0.25), (1.08, 1.0), (1.12, 7.0)):
+            joints(t, zoom)
+            feed(node, scene(140.0, 96.0), t)
+            box = box_from_polygon(cap.box[-1])
+            errors.append((pan_tilt_error_from_msg(cap.error[-1])[0], box.cx))
+        scales = (1.0, 1.5, 4.0, 4.0)  # linear between the pairs, held beyond the last
+        for (pan, cx), scale in zip(errors, scales):
+            assert pan == pytest.approx(math.atan2(W / 2 - cx, fx * scale)), (pan, cx, scale)
+        assert abs(errors[2][0]) < abs(errors[0][0]) / 3
+        assert node.inputs.ignored_joint_states == 0
+        joints(1.16, 0.0, names=("pan", "tilt", "zoom"))  # other names: not the head's, counted, not used
+        assert node.inputs.ignored_joint_states == 1 and node.inputs.zoom == 7.0
     finally:
         node.destroy_node()
 
@@ -300,14 +362,16 @@ def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:
 
         node.tracker.update = spy
         for t, pan in ((0.95, 0.0), (1.05, 0.01), (1.15, 0.02)):
-            node._on_joint_state(JointState(header=header(t), name=["pan", "tilt"], position=[pan, 0.0]))
+            node.inputs.on_joint_state(JointState(
+                header=header(t), name=["pan", "tilt"], position=[pan, 0.0]))
         feed(node, scene(100, 96), 1.05)
         feed(node, scene(100, 96), 1.15)
         fx = (W / 2) / math.tan(math.radians(15.0))
         # pan +0.01 rad (left) per frame moves the scene right by fx * tan(0.01) pixels
         assert seen[-1][0] == pytest.approx(fx * math.tan(0.01)) and seen[-1][1] == pytest.approx(0.0)
         node.set_parameters([Parameter("ego_motion_compensation", value=False)])
-        node._on_joint_state(JointState(header=header(1.25), name=["pan", "tilt"], position=[0.03, 0.0]))
+        node.inputs.on_joint_state(JointState(
+            header=header(1.25), name=["pan", "tilt"], position=[0.03, 0.0]))
         feed(node, scene(100, 96), 1.25)
         assert seen[-1] == (0.0, 0.0)
     finally:

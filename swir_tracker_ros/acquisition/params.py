@@ -26,12 +26,24 @@ _M = MotionParams()  # the motion detector's defaults are written once, in Motio
 class AcquisitionParams:
     """Topics, detector choice, hand-off behaviour and the detectors' settings."""
 
-    image_topic: str = _f(topics.IMAGE, "input sensor_msgs/Image topic", read_only=True)
-    joint_states_topic: str = _f(topics.JOINT_STATES, "head joint states for ego-motion",
-                                 read_only=True)
+    image_topic: str = _f(topics.IMAGE, "input image topic, image_transport's base name", read_only=True)
+    image_transport: str = _f("raw", "raw (sensor_msgs/Image on image_topic) or compressed (CompressedImage, "
+                              "JPEG or PNG, on image_topic/compressed)", choices=topics.TRANSPORTS,
+                              read_only=True)
+    camera_info_topic: str = _f("", "CameraInfo (its focal length for the ego-motion shift; fov_h_deg "
+                                "until one arrives); '' = beside the image "
+                                "(<dirname(image_topic)>/camera_info)",
+                                read_only=True, empty_derived=True)
+    joint_states_topic: str = _f(topics.JOINT_STATES, "head joint states for ego-motion (bring-up: "
+                                 "joint_states)", read_only=True)
+    pan_joint: str = _f("pan", "name of the pan joint in the joint states (bring-up's pan_joint)",
+                        read_only=True)
+    tilt_joint: str = _f("tilt", "name of the tilt joint in the joint states (bring-up's tilt_joint)",
+                         read_only=True)
     detector: str = _f("motion", "detector: motion (background subtraction) or hog (OpenCV people)",
                        choices=DETECTORS)
-    fov_h_deg: float = _f(8.0, "horizontal field of view (deg) for the ego-motion shift", 0.1, 179.0)
+    fov_h_deg: float = _f(8.0, "horizontal field of view (deg) for the ego-motion shift without CameraInfo",
+                          0.1, 179.0)
     ego_motion_compensation: bool = _f(True, "compensate detector and predictions for the head's motion")
     auto_handoff: bool = _f(False, "hand off a confirmed moving target by itself (tracker idle or lost)")
     candidates: int = _f(3, "tracks offered when the single-object tracker reports lost", 1, 50)

@@ -256,7 +256,7 @@ def diagnostic_series(rec: RunRecords, name: str, key: str, t0: float, t1: float
 def bridge_latency(rec: RunRecords, t0: float, t1: float) -> tuple[float, float, float]:
     """(frame -> bridge p50, frame -> Pelco frame p50, its p95) in ms from the bridge's /diagnostics."""
     def series_(key: str) -> np.ndarray:
-        return diagnostic_series(rec, "swir_tracker/positioner", key, t0, t1)
+        return diagnostic_series(rec, "/positioner_bridge: positioner", key, t0, t1)
 
     return (_stat(series_("error_age_ms_p50"), 50), _stat(series_("command_age_ms_p50"), 50),
             _stat(series_("command_age_ms_p95"), 95))
@@ -336,7 +336,7 @@ def tracker_latency_ms(rec: RunRecords, t0: float, t1: float) -> np.ndarray:
     the node clock) when it reports them; otherwise stamp to arrival at the recorder, which also counts
     the recorder's own queue (it records every camera image, so it lags when the machine is busy).
     """
-    ages = diagnostic_series(rec, "swir_tracker/tracker_node", "stamp_age_ms_p50", t0, t1)
+    ages = diagnostic_series(rec, "/tracker: tracker_node", "stamp_age_ms_p50", t0, t1)
     if len(ages):
         return ages
     return np.array([(r[1] - r[0]) * 1e3 for r in rec.error if t0 <= r[0] <= t1])

@@ -109,9 +109,10 @@ def params_dir() -> Path:
 
 
 def dds_profile() -> Path | None:
-    """The package's large-frame Fast DDS profile (config/fastdds_shm_large.xml, docs/interfaces.md)."""
+    """The package's large-frame Fast DDS profile: shared memory and UDP (config/fastdds_shm_udp.xml,
+    docs/interfaces.md)."""
     for base in (Path(__file__).resolve().parents[2], Path(sys.prefix) / "share" / PACKAGE):
-        path = base / "config" / "fastdds_shm_large.xml"
+        path = base / "config" / "fastdds_shm_udp.xml"
         if path.is_file():
             return path
     return None

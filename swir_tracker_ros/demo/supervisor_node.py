@@ -36,11 +36,13 @@ from swir_tracker_ros.nodes.graph import reported_publishers
 # reports on /diagnostics): the supervisor's own view of the graph says nothing about whether, say, the
 # bridge has found the tracker's error stream yet, and DDS discovery between two processes can lag the
 # others by seconds (the head then stood still for the first 2.4 s of a run).
+# The demo's nodes run in the root namespace under their default names (node_status_name).
+POSITIONER_STATUS, TRACKER_STATUS = "/positioner_bridge: positioner", "/tracker: tracker_node"
 WIRING = (
-    ("swir_tracker/positioner", topics.PAN_TILT_ERROR),
-    ("swir_tracker/positioner", topics.TRACK_STATE),
-    ("swir_tracker/tracker_node", topics.IMAGE),
-    ("swir_tracker/tracker_node", topics.JOINT_STATES),
+    (POSITIONER_STATUS, topics.PAN_TILT_ERROR),
+    (POSITIONER_STATUS, topics.TRACK_STATE),
+    (TRACKER_STATUS, topics.IMAGE),
+    (TRACKER_STATUS, topics.JOINT_STATES),
     ("swir_tracker/scene_camera", topics.JOINT_STATES),
 )
 

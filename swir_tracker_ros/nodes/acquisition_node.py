@@ -7,8 +7,9 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
-from sensor_msgs.msg import Image, JointState, RegionOfInterest
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState, RegionOfInterest
 from std_msgs.msg import UInt32
+from vision_msgs.msg import Detection2DArray
 from visualization_msgs.msg import MarkerArray
 
 from msg_adapters.acquisition import (
@@ -18,7 +19,9 @@ from msg_adapters.acquisition import (
     selected_id,
     tracks_to_markers,
 )
-from msg_adapters.camera_info import intrinsics_from_fov
+from msg_adapters.camera_info import Intrinsics, intrinsics_from_camera_info, intrinsics_from_fov
+from msg_adapters.compressed import compressed_to_numpy
+from msg_adapters.detections import Detected, detections_msg
 from msg_adapters.errors import MessageError
 from msg_adapters.geometry import box_to_roi, ego_shift
 from msg_adapters.image import image_to_numpy
@@ -40,6 +43,7 @@ from swir_tracker_ros.types import Box, TrackState
 
 NODE_NAME = "acquisition"
 MOT_PREFIX = "mot."
+PERSON = "person"  # the class of every detection: the detectors find pedestrians (docs/acquisition.md)
 
 
 PARAMS_FILE = ParamsFile(
@@ -74,9 +78,17 @@ class AcquisitionNode(Node):
         self.pub_candidates = self.create_publisher(MarkerArray, topics.ACQUISITION_CANDIDATES, output)
         self.pub_init = self.create_publisher(RegionOfInterest, topics.TRACK_INIT, output)
         self.pub_debug = self.create_publisher(Image, topics.ACQUISITION_DEBUG_IMAGE, output)
+        self.pub_detections = self.create_publisher(Detection2DArray, topics.ACQUISITION_DETECTIONS, output)
+        self.pub_track_detections = self.create_publisher(
+            Detection2DArray, topics.ACQUISITION_TRACK_DETECTIONS, output)
         self.size = (0, 0)
-        self.create_subscription(Image, self.params.image_topic, self._guard(self._on_image),
-                                 profile(topics.LATEST))
+        raw = self.params.image_transport == "raw"
+        self.create_subscription(Image if raw else CompressedImage,
+                                 topics.transport_topic(self.params.image_topic, self.params.image_transport),
+                                 self._guard(self._on_image), profile(topics.LATEST))
+        self.camera_intr: Intrinsics | None = None
+        self.create_subscription(CameraInfo, self.params.camera_info_topic or topics.camera_info_topic(
+            self.params.image_topic), self._guard(self._on_camera_info), profile(topics.SENSOR))
         self.create_subscription(JointState, self.params.joint_states_topic, self._guard(self._on_joints),
                                  profile(topics.SENSOR))
         self.create_subscription(UInt32, topics.ACQUISITION_SELECT, self._guard(self._on_select), output)
@@ -104,7 +116,7 @@ class AcquisitionNode(Node):
         self.mot = MultiTargetTracker(params, self.mot.siamese)
 
     def _on_joints(self, msg: JointState) -> None:
-        pan, tilt, _ = joint_state_to_pan_tilt(msg)
+        pan, tilt, _ = joint_state_to_pan_tilt(msg, self.params.pan_joint, self.params.tilt_joint)
         self.pose = (pan, tilt)
 
     def _shift(self, width: int, height: int) -> tuple[float, float]:
@@ -113,11 +125,15 @@ class AcquisitionNode(Node):
         prev, self.prev_pose = self.prev_pose, self.pose
         if prev is None:
             return (0.0, 0.0)
-        intr = intrinsics_from_fov(width, height, self.params.fov_h_deg)
+        intr = self.camera_intr.scaled_to(width, height) if self.camera_intr is not None else \
+            intrinsics_from_fov(width, height, self.params.fov_h_deg)
         return ego_shift(self.pose[0] - prev[0], self.pose[1] - prev[1], intr)
 
-    def _on_image(self, msg: Image) -> None:
-        frame = image_to_numpy(msg).pixels
+    def _on_camera_info(self, msg: CameraInfo) -> None:
+        self.camera_intr = intrinsics_from_camera_info(msg)
+
+    def _on_image(self, msg: Image | CompressedImage) -> None:
+        frame = (image_to_numpy(msg) if isinstance(msg, Image) else compressed_to_numpy(msg)).pixels
         hdr = header_of(msg)
         height, width = frame.shape[:2]
         self.size = (width, height)
@@ -131,6 +147,11 @@ class AcquisitionNode(Node):
                     self.target_app = v.appearance
         boxes = [TrackBox(t.id, t.box, t.status.value) for t in tracks]
         self.pub_tracks.publish(tracks_to_markers(boxes, hdr))
+        # vision_msgs (issue 39): the detector's boxes (class person, its score) and the tracks (class their
+        # life-cycle status, score the fraction of frames they were detected in, id the track ID)
+        self.pub_detections.publish(detections_msg([Detected(d.box, PERSON, d.score) for d in dets], hdr))
+        self.pub_track_detections.publish(detections_msg(
+            [Detected(t.box, t.status.value, t.hits / max(t.age, 1), str(t.id)) for t in tracks], hdr))
         candidates: list[TrackBox] = []
         if self.tracker_state is TrackState.LOST and self.target_app is not None:
             by_id = {v.id: v for v in self.views}

@@ -57,6 +57,8 @@ def check_topic_names(params: object) -> None:
         value = getattr(params, f.name)
         if not f.name.endswith("_topic") or not isinstance(value, str):
             continue
+        if value == "" and f.metadata.get("empty_derived"):  # '' = derived from another name
+            continue
         try:
             validate_full_topic_name(expand_topic_name(value, "node", "/"))
         except (ValueError, NameValidationException) as exc:

@@ -44,7 +44,7 @@ from swir_tracker_ros.pelco.bridge import HeadMode as Mode
 from swir_tracker_ros.pelco.bridge import MoveGoal, MoveKind, PositionerBridge
 from swir_tracker_ros.pelco.params import PositionerParams
 
-STATUS_NAME = "swir_tracker/positioner"
+STATUS_NAME = "positioner"  # the task: the status is `<node full name>: positioner` (node_status_name)
 FEEDBACK_PERIOD = 0.1  # s between two MoveHead feedback messages
 
 
@@ -292,5 +292,7 @@ class HeadSurface:
                 level, text = diagnostics.OK, b.reason
             values["feedback"] = "true" if b.pose() is not None else "false"
         values = dict(values, bad_messages=self._bad_messages, **inputs)
-        st = diagnostics.status(STATUS_NAME, level, text, values, hardware_id=f"pelco-d:{p.address}")
+        # the port names the head: two heads at address 1 on their own lines differ (issue 39)
+        name = diagnostics.node_status_name(self.node.get_fully_qualified_name(), STATUS_NAME)
+        st = diagnostics.status(name, level, text, values, hardware_id=f"pelco-d:{p.address}@{p.port}")
         self.diag_pub.publish(diagnostics.diagnostic_array(header(self._now_seconds()), [st]))

@@ -44,9 +44,14 @@ ENDPOINTS: tuple[Endpoint, ...] = (
              "best effort, keep last 1", "the frames as JPEG or PNG (8- or 16-bit), image_transport's "
              "`compressed`", "image_topic", (("image_transport", "compressed"),)),
     Endpoint(topics.CAMERA_INFO, "sensor_msgs/msg/CameraInfo", "in", "best effort, 10",
-             "optional; K (with binning/ROI, REP-104) gives fx, fy, cx, cy", "camera_info_topic"),
+             "beside the image by default (`<dirname(image_topic)>/camera_info`); K (with binning/ROI, "
+             "REP-104) gives fx, fy, cx, cy, scaled by `zoom_focal_scale` at the zoom joint's position; D "
+             "(plumb_bob, rational_polynomial) is undone for the error; none within `camera_info_timeout_s`: "
+             "a throttled warning and the FOV fallback", "camera_info_topic"),
     Endpoint(topics.JOINT_STATES, "sensor_msgs/msg/JointState", "in", "best effort, 10",
-             "joints `pan`, `tilt` (rad) for ego-motion compensation", "joint_states_topic"),
+             "joints `pan_joint`, `tilt_joint` (rad) for ego-motion compensation, `zoom_joint` (0 wide .. 1 "
+             "tele) for the focal length; other names: counted on /diagnostics and warned about; bring-up: "
+             "`joint_states`", "joint_states_topic"),
     Endpoint(topics.TRACK_INIT, "sensor_msgs/msg/RegionOfInterest", "in", "reliable, 10",
              "select the target: its box in full-resolution pixels (x, y offset, width, height); starts on "
              "the next frame, no answer"),
@@ -59,8 +64,15 @@ ENDPOINTS: tuple[Endpoint, ...] = (
     Endpoint(topics.TRACK_CANCEL, topics.SERVICE_TYPES[topics.TRACK_CANCEL], "service", "",
              "stop tracking; state -> `idle`"),
     Endpoint(topics.TRACK_BOX, topics.TYPES[topics.TRACK_BOX], "out", "reliable, 10", _BOX),
+    Endpoint(topics.TRACK_DETECTIONS, topics.TYPES[topics.TRACK_DETECTIONS], "out", "reliable, 10",
+             "every processed frame, with track/box: one Detection2D while `tracking` / `occluded` (bbox "
+             "centre and size in pixels, theta 0; one hypothesis: class_id the state, score the "
+             "correlation peak in [0, 1]; id the track's number, new at each start), none while `idle` / "
+             "`lost`; the image's header (vision_msgs convention)"),
     Endpoint(topics.PAN_TILT_ERROR, topics.TYPES[topics.PAN_TILT_ERROR], "out", "reliable, 10",
-             "x = pan error, y = tilt error (rad), z = 0; only while `tracking` / `occluded`"),
+             "x = pan error, y = tilt error (rad), z = 0; only while `tracking` / `occluded`; the image's "
+             "stamp, frame_id `angles_frame_id` (the head's pan link: joint angles, not a vector in the "
+             "optical frame)"),
     Endpoint(topics.TARGET_RATE, topics.TYPES[topics.TARGET_RATE], "out", "reliable, 10",
              "the target's angular rate (rad/s, x pan, y tilt, REP-103) in the head's base frame: the Kalman "
              "box-centre velocity through the intrinsics over the camera's median frame period, plus the "
@@ -79,7 +91,8 @@ ENDPOINTS: tuple[Endpoint, ...] = (
     Endpoint(topics.transport_topic(topics.TRACK_DEBUG_IMAGE, "compressed"), IMAGE_TYPES["compressed"], "out",
              "reliable, 1", "the same picture as JPEG (`debug_jpeg_quality`), only while someone subscribes"),
     Endpoint(topics.DIAGNOSTICS, topics.TYPES[topics.DIAGNOSTICS], "out", "reliable, 10",
-             "every `diagnostics_period_s`: status `swir_tracker/tracker_node`, hardware_id the node's full "
+             "every `diagnostics_period_s`: status `<node full name>: tracker_node` (e.g. `/head1/tracker: "
+             "tracker_node`), hardware_id the node's full "
              "name (see below)"),
 )
 

@@ -8,20 +8,18 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
-from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState, RegionOfInterest
+from sensor_msgs.msg import CompressedImage, Image, RegionOfInterest
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 
-from msg_adapters.camera_info import Intrinsics, intrinsics_from_camera_info, intrinsics_from_fov
 from msg_adapters.compressed import compressed_to_numpy
-from msg_adapters.diagnostics import OK, STALE, WARN, diagnostic_array, status
+from msg_adapters.diagnostics import OK, STALE, WARN, diagnostic_array, node_status_name, status
 from msg_adapters.errors import MessageError
-from msg_adapters.geometry import box_from_roi, ego_shift
+from msg_adapters.geometry import box_from_roi
 from msg_adapters.image import Frame, image_to_numpy
-from msg_adapters.joint_state import joint_state_to_pan_tilt
 from msg_adapters.qos import profile
-from msg_adapters.rate import head_rate
 from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
@@ -33,10 +31,10 @@ from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
 from swir_tracker_ros.nodes.ros_params import bind_parameters
 from swir_tracker_ros.nodes.runner import run_node, signals_deferred, user_arguments
 from swir_tracker_ros.nodes.selection import CatchUp, Code, StoredFrame, Verdict
+from swir_tracker_ros.nodes.tracker_inputs import HeadInputs
 from swir_tracker_ros.nodes.tracker_node_params import (
     FormatWatch,
     FrameStats,
-    HeadPoseHistory,
     TrackerNodeParams,
     fmt_key,
     frame_problem,
@@ -47,7 +45,7 @@ from swir_tracker_ros.tracker import Tracker, TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
 NODE_NAME = "tracker"
-DIAG_NAME = "swir_tracker/tracker_node"
+DIAG_NAME = "tracker_node"  # the task: the status is `<node full name>: tracker_node` (node_status_name)
 TRACKER_PREFIX = "tracker."
 
 
@@ -66,28 +64,25 @@ class TrackerNode(Node):
         with signals_deferred():  # a Ctrl-C inside numba's ctypes callbacks would be swallowed there
             Tracker.warm_up()  # the compiled loops load now (~1 s), not on the first tracked frame
         self.stats = FrameStats()
-        self.poses = HeadPoseHistory()
-        self.camera_intr: Intrinsics | None = None
         self.pending_init: Box | None = Box(*self.params.init_box) if self.params.init_box else None
         self.last_box: Box | None = None
         self.last_result: TrackResult | None = None
         self.last_stamp = 0.0
         self.format = FormatWatch()  # the size and pixel format of the frames being tracked
         self._restart: str | None = None  # why the pending init restarts a running track (never silent)
-        self.prev_pose: tuple[float, float] | None = None
         self.window_start = time.monotonic()
         self._warned: dict[str, tuple[float, int]] = {}  # kind -> (time of the last warning, held back)
         p = self.params
         self._untracked = 0.0  # frame periods received while a selection caught up, unseen by the core
         self.outputs = TrackOutputs(self)
-        guard, output, sensor = self._guard, profile(topics.RELIABLE), profile(topics.SENSOR)
+        guard, output = self._guard, profile(topics.RELIABLE)
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, output)
         # a queue of one: the executor always takes the newest frame, never a backlog
         image_type = Image if p.image_transport == "raw" else CompressedImage
         self.image_input = topics.transport_topic(p.image_topic, p.image_transport)
-        self.create_subscription(image_type, self.image_input, guard(self._on_image), profile(topics.LATEST))
-        self.create_subscription(CameraInfo, p.camera_info_topic, guard(self._on_camera_info), sensor)
-        self.create_subscription(JointState, p.joint_states_topic, guard(self._on_joint_state), sensor)
+        self.create_subscription(image_type, self.image_input, guard(self._on_image), profile(topics.LATEST),
+                                 event_callbacks=SubscriptionEventCallbacks(message_lost=self._on_lost))
+        self.inputs = HeadInputs(self, p, guard, self._warn)  # camera_info, joint states, ego-motion
         self.create_subscription(RegionOfInterest, topics.TRACK_INIT, guard(self._on_init), output)
         self.create_service(Trigger, topics.TRACK_CANCEL, self._on_cancel)
         self.selector = Selector(self, self, guard)  # track/select, clicks, recent frames, catch-up
@@ -120,6 +115,11 @@ class TrackerNode(Node):
         self._warned[kind] = (now, 0)
         self.get_logger().warning(text + (f" ({held} similar since the last warning)" if held else ""))
 
+    def _on_lost(self, info) -> None:
+        """DDS lost image samples on the way (fragments of a large frame, a full socket buffer): transport
+        loss, counted apart from frames overwritten in the depth-1 queue (`dropped_lost` on /diagnostics)."""
+        self.stats.lost += int(info.total_count_change)
+
     def _on_image(self, msg: Image | CompressedImage) -> None:
         t_recv = time.perf_counter()
         self.stats.received += 1
@@ -151,12 +151,12 @@ class TrackerNode(Node):
             return
         depth = (self.params.bit_depth or frame.bit_depth) if pixels.dtype.itemsize == 2 else None
         self.selector.store(StoredFrame(stamp, pixels, depth, elapsed, hdr))
-        intr = self._intrinsics(width, height)
+        intr = self.inputs.intrinsics(width, height)
         if self.selector.busy:  # this frame waits in the history for the selection's catch-up
             self._untracked += elapsed
             self.outputs.publish_state(hdr, self._unmeasured(), width, height)
             return
-        shift = self._ego_shift(stamp, intr)
+        shift = self.inputs.ego_shift(stamp, intr)
         t_core = time.perf_counter()
         result = self._track(pixels, shift, {} if depth is None else {"bit_depth": depth},
                              elapsed + self._untracked)
@@ -171,20 +171,6 @@ class TrackerNode(Node):
         self.stats.overhead_ms.append((now - t_recv) * 1e3 - core_ms)
         if stamp > 0:
             self.stats.age_ms.append((self.get_clock().now().nanoseconds * 1e-9 - stamp) * 1e3)
-
-    def _on_camera_info(self, msg: CameraInfo) -> None:
-        try:
-            self.camera_intr = intrinsics_from_camera_info(msg)
-        except MessageError as exc:
-            self._warn("camera_info", f"ignoring CameraInfo, using the FOV fallback: {exc}")
-
-    def _on_joint_state(self, msg: JointState) -> None:
-        try:
-            pan, tilt, stamp = joint_state_to_pan_tilt(msg)
-        except MessageError as exc:
-            self._warn("joint_state", f"ignoring a joint state: {exc}")
-            return
-        self.poses.add(stamp, pan, tilt)
 
     def _on_init(self, msg: RegionOfInterest) -> None:
         try:
@@ -216,7 +202,7 @@ class TrackerNode(Node):
             self.diag_timer = self.create_timer(params.diagnostics_period_s,
                                                 self._guard(self._publish_diagnostics))
         self.selector.set_bounds(params)
-        self.params = params
+        self.params = self.inputs.params = params
 
     def _on_tracker_params(self, params: TrackerParams) -> None:
         """New core parameters: a fresh core, re-initialised on the last box at the next frame."""
@@ -242,29 +228,18 @@ class TrackerNode(Node):
         if job.result is not None and job.result.state in ACTIVE:
             self.last_box = job.result.box
         self.pending_init, self._restart, self._untracked = None, None, 0.0
-        self.prev_pose = self.poses.at(job.frame.stamp)
+        self.inputs.prev_pose = self.inputs.poses.at(job.frame.stamp)
         height, width = job.frame.pixels.shape[:2]
-        self.outputs.publish(job.frame.msg_header, job.result, self._intrinsics(width, height),
+        self.outputs.publish(job.frame.msg_header, job.result, self.inputs.intrinsics(width, height),
                              self._head_motion(job.frame.stamp))
 
     def _head_motion(self, stamp: float) -> tuple[float, tuple[float, float]] | None:
-        """(the camera's median frame period, the head's joint rates) for `track/target_rate` at a frame's
-        stamp: the head's rate from the joint states only without ego-motion compensation (with it the
-        core's velocity is the target's own); None until 5 frame intervals (and the poses) are known."""
-        period = self.stats.period(50.0)
-        if period <= 0.0:
-            return None
-        if self.params.ego_motion_compensation:
-            return period, (0.0, 0.0)
-        head = head_rate(self.poses.at, stamp, period)
-        return None if head is None else (period, head)
+        """`HeadInputs.head_motion` with the camera's median frame period (known after 5 intervals)."""
+        return self.inputs.head_motion(stamp, self.stats.period(50.0))
 
     def shift_between(self, t0: float, t1: float, width: int, height: int) -> tuple[float, float]:
-        """Image shift caused by the head between two frame stamps (poses known now, at catch-up time)."""
-        p0, p1 = self.poses.at(t0), self.poses.at(t1)
-        if not self.params.ego_motion_compensation or p0 is None or p1 is None:
-            return (0.0, 0.0)
-        return ego_shift(p1[0] - p0[0], p1[1] - p0[1], self._intrinsics(width, height))
+        """Image shift caused by the head between two frame stamps (the Selector's catch-up asks)."""
+        return self.inputs.shift_between(t0, t1, width, height)
 
     def _unmeasured(self) -> TrackResult:
         """The current state without a measurement: what a frame that the core did not see reports."""
@@ -294,7 +269,7 @@ class TrackerNode(Node):
         if old is None:
             return skip
         (oh, ow), (nh, nw) = old[0][:2], pixels.shape[:2]
-        self.prev_pose = None
+        self.inputs.prev_pose = None
         self.selector.history.clear()  # a selection names a frame of the new format
         self.selector.end(Verdict(Code.TRACKER_FAILED, "the image format changed while catching up"))
         if self.pending_init is not None:
@@ -315,19 +290,6 @@ class TrackerNode(Node):
         self.stats.unusable += 1
         self._warn("unusable", f"skipped a frame: {reason}")
         self.outputs.publish_state(header, self._unmeasured(), *self.frame_size)
-
-    def _intrinsics(self, width: int, height: int) -> Intrinsics:
-        if self.params.use_camera_info and self.camera_intr is not None:
-            return self.camera_intr.scaled_to(width, height)
-        return intrinsics_from_fov(width, height, self.params.fov_h_deg, self.params.fov_v_deg)
-
-    def _ego_shift(self, stamp: float, intr: Intrinsics) -> tuple[float, float]:
-        """Image shift caused by the head since the previous frame (head pose interpolated at the stamp)."""
-        pose = self.poses.at(stamp)
-        prev, self.prev_pose = self.prev_pose, pose
-        if not self.params.ego_motion_compensation or pose is None or prev is None:
-            return (0.0, 0.0)
-        return ego_shift(pose[0] - prev[0], pose[1] - prev[1], intr)
 
     def _track(self, pixels, shift: tuple[float, float], hint: dict, elapsed: float = 1.0
                ) -> TrackResult | None:
@@ -369,16 +331,16 @@ class TrackerNode(Node):
         else:
             level, text = OK, "ok"
         state = self.last_result.state.value if self.last_result else TrackState.IDLE.value
-        values = {"state": state, "intrinsics": "camera_info" if self.params.use_camera_info and
-                  self.camera_intr is not None else "fov", **values,
+        values = {"state": state, **self.inputs.report(), **values,
                   "selecting": "true" if self.selector.busy else "false",
                   "history_frames": len(self.selector.history),
                   "history_mb": self.selector.history.nbytes / MIB,
-                  **input_publishers(self, (self.image_input, self.params.camera_info_topic,
+                  **input_publishers(self, (self.image_input, self.inputs.camera_info_topic,
                                             self.params.joint_states_topic))}
         header = Header(stamp=self.get_clock().now().to_msg())
-        self.pub_diag.publish(diagnostic_array(header, [status(DIAG_NAME, level, text, values,
-                                                               self.get_fully_qualified_name())]))
+        name = self.get_fully_qualified_name()
+        self.pub_diag.publish(diagnostic_array(header, [status(node_status_name(name, DIAG_NAME), level, text,
+                                                               values, name)]))
 
 
 def _scale_box(box: Box, sx: float, sy: float) -> Box:

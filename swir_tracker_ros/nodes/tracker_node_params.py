@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 from collections import deque
 from dataclasses import dataclass, field
@@ -29,15 +30,35 @@ class TrackerNodeParams:
         "compressed (sensor_msgs/CompressedImage, JPEG or PNG, on image_topic/compressed).",
         choices=topics.TRANSPORTS, read_only=True)
     camera_info_topic: str = param(
-        topics.CAMERA_INFO,
-        "Optional sensor_msgs/CameraInfo topic; its K gives the focal lengths.", read_only=True)
+        "", "sensor_msgs/CameraInfo topic (K: focal lengths and principal point; D: plumb_bob distortion); "
+        "'' = beside the image (image_transport's convention: <dirname(image_topic)>/camera_info).",
+        read_only=True, empty_derived=True)
+    camera_info_timeout_s: float = param(
+        5.0, "Warn (throttled, and on /diagnostics) when no CameraInfo has arrived this long after the first "
+        "frame while use_camera_info is true: the field-of-view fallback is in use.", 0.0, 3600.0)
     joint_states_topic: str = param(
-        topics.JOINT_STATES,
-        "sensor_msgs/JointState of the head (joints pan, tilt in rad) for ego-motion.", read_only=True)
+        topics.JOINT_STATES, "sensor_msgs/JointState of the head (joints pan_joint, tilt_joint in rad, "
+        "zoom_joint 0 wide .. 1 tele) for ego-motion and the zoom's focal length; bring-up: joint_states, "
+        "where robot_state_publisher reads them.", read_only=True)
+    pan_joint: str = param("pan", "Name of the pan joint in the joint states (bring-up's pan_joint).",
+                           read_only=True)
+    tilt_joint: str = param("tilt", "Name of the tilt joint in the joint states (bring-up's tilt_joint).",
+                            read_only=True)
+    zoom_joint: str = param("zoom", "Name of the zoom joint in the joint states (bring-up's zoom_joint).",
+                            read_only=True)
+    angles_frame_id: str = param(
+        "pan_link", "header.frame_id of track/pan_tilt_error and track/target_rate: the frame whose z is the "
+        "pan axis and y the tilt axis (the URDF's <prefix>pan_link; bring-up sets it), not the optical "
+        "frame: the vectors hold joint angles and rates.", read_only=True)
     use_camera_info: bool = param(
         True, "Use CameraInfo intrinsics when received; otherwise (or when false) the FOV fallback.")
     fov_h_deg: float = param(
         8.0, "Horizontal field of view (deg) for the pinhole fallback without CameraInfo.", 0.1, 179.0)
+    zoom_focal_scale: list[float] = param(
+        [], "Zoom -> focal length table: pairs zoom, scale (zoom 0 wide .. 1 tele, as the zoom joint reports "
+        "it; scale multiplies fx and fy of the CameraInfo or the FOV fallback, which describe zoom 0), "
+        "ascending in zoom, linear in between, held beyond the ends; [] = the focal length does not follow "
+        "the zoom. E.g. a 1x-10x lens: [0.0, 1.0, 0.5, 3.2, 1.0, 10.0].")
     fov_v_deg: float = param(
         0.0, "Vertical field of view (deg) for the fallback; 0 means square pixels (fy = fx).", 0.0, 179.0)
     init_box: list[float] = param(
@@ -84,6 +105,17 @@ class TrackerNodeParams:
                 raise ParameterError(f"parameter init_box must be [] or x, y, w, h; got {self.init_box}")
             if not (self.init_box[2] > 0 and self.init_box[3] > 0):
                 raise ParameterError(f"parameter init_box needs a positive w and h; got {self.init_box}")
+        if len({self.pan_joint, self.tilt_joint, self.zoom_joint}) != 3 or not all(
+                (self.pan_joint, self.tilt_joint, self.zoom_joint)):
+            raise ParameterError(f"parameters pan_joint, tilt_joint and zoom_joint must be distinct, "
+                                 f"non-empty names; got {self.pan_joint!r}, {self.tilt_joint!r}, "
+                                 f"{self.zoom_joint!r}")
+        table = self.zoom_focal_scale
+        zooms, scales = table[0::2], table[1::2]
+        if table and (len(table) % 2 or len(table) < 4 or any(b <= a for a, b in itertools.pairwise(zooms))
+                      or not all(s > 0 for s in scales)):
+            raise ParameterError(f"parameter zoom_focal_scale must be [] or at least 2 pairs zoom, scale "
+                                 f"with ascending zoom and positive scales; got {table}")
         if self.bit_depth not in (0, 8, 10, 12, 14, 16):
             raise ParameterError(f"parameter bit_depth must be 0, 8, 10, 12, 14 or 16; got {self.bit_depth}")
 
@@ -185,7 +217,8 @@ class FrameStats:
     malformed: int = 0
     unusable: int = 0  # decoded but not trackable (too small, non-finite) or of an unconfirmed new format
     stale: int = 0
-    skipped: int = 0  # frames missing between consecutive stamps (overwritten in the depth-1 queue)
+    skipped: int = 0  # frames missing between consecutive stamps (overwritten in the depth-1 queue, or lost)
+    lost: int = 0  # samples DDS reported lost on the way (the image reader's sample-lost status): transport
     errors: int = 0
     latency_ms: list[float] = field(default_factory=list)  # receive -> last publish, in the node
     core_ms: list[float] = field(default_factory=list)
@@ -225,7 +258,7 @@ class FrameStats:
         counts = {"received": self.received, "processed": self.processed,
                   "dropped_malformed": self.malformed, "dropped_unusable": self.unusable,
                   "dropped_stale": self.stale,
-                  "dropped_skipped": self.skipped, "callback_errors": self.errors}
+                  "dropped_skipped": self.skipped, "dropped_lost": self.lost, "callback_errors": self.errors}
         for k, v in counts.items():
             self.totals[k] = self.totals.get(k, 0) + v
         values: dict[str, object] = {
@@ -240,8 +273,10 @@ class FrameStats:
             **{f"window_{k}": v for k, v in counts.items()},
             **{f"total_{k}": v for k, v in self.totals.items()},
         }
-        trouble = bool(self.malformed or self.unusable or self.skipped or self.errors or self.stale)
+        trouble = bool(self.malformed or self.unusable or self.skipped or self.errors or self.stale
+                       or self.lost)
         self.received = self.processed = self.malformed = self.unusable = self.stale = self.skipped = 0
+        self.lost = 0
         self.errors = 0
         self.latency_ms, self.core_ms, self.age_ms, self.overhead_ms = [], [], [], []
         return values, trouble

@@ -2,8 +2,9 @@
 """The tracker node's outputs: one publisher per topic and what one frame publishes on each.
 
 Every output of a frame carries that image's stamp; `track/box` a pixel frame_id (`msg_adapters.geometry.
-pixel_frame_id`), the others the image's header. A new per-frame output is one more publisher here and one
-more line in `publish`.
+pixel_frame_id`), `track/detections` (vision_msgs) and the image markers the image's header (the image plane
+of that camera), the angles (`track/pan_tilt_error`, `track/target_rate`) the head's `angles_frame_id`. A new
+per-frame output is one more publisher here and one more line in `publish`.
 """
 
 from __future__ import annotations
@@ -14,10 +15,12 @@ from geometry_msgs.msg import PolygonStamped, Vector3Stamped
 from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
+from vision_msgs.msg import Detection2DArray
 from visualization_msgs.msg import ImageMarker
 
 from msg_adapters.camera_info import Intrinsics
 from msg_adapters.debug_image import render_debug, render_debug_compressed
+from msg_adapters.detections import track_detections
 from msg_adapters.geometry import box_to_polygon, pan_tilt_error, pan_tilt_to_msg, pixel_header
 from msg_adapters.image_marker import track_markers
 from msg_adapters.qos import profile
@@ -35,6 +38,7 @@ class TrackOutputs:
     """Publishers of `track/*` and the per-frame publishing; counts frames since the target was tracked."""
 
     def __init__(self, node: Node) -> None:
+        self.node = node
         output, debug = profile(topics.RELIABLE), profile(topics.DEBUG_IMAGE)
         self.box = node.create_publisher(PolygonStamped, topics.TRACK_BOX, output)
         self.error = node.create_publisher(Vector3Stamped, topics.PAN_TILT_ERROR, output)
@@ -42,10 +46,13 @@ class TrackOutputs:
         self.state = node.create_publisher(DiagnosticArray, topics.TRACK_STATE, output)
         self.typed = node.create_publisher(TrackStateMsg, topics.TRACK_STATE_TYPED, output)
         self.image_markers = node.create_publisher(ImageMarker, topics.TRACK_MARKERS, output)
+        self.detections = node.create_publisher(Detection2DArray, topics.TRACK_DETECTIONS, output)
         self.debug = node.create_publisher(Image, topics.TRACK_DEBUG_IMAGE, debug)
         self.debug_compressed = node.create_publisher(
             CompressedImage, topics.transport_topic(topics.TRACK_DEBUG_IMAGE, "compressed"), debug)
         self.frames_occluded = 0
+        self.tracks = 0  # targets tracked so far: a track's id on track/detections, new at each start
+        self._was_active = False
 
     def publish(self, header: Header, result: TrackResult | None, intr: Intrinsics,
                 motion: tuple[float, tuple[float, float]] | None = None) -> None:
@@ -56,12 +63,17 @@ class TrackOutputs:
         result = IDLE_RESULT if result is None else result
         active = result.state in ACTIVE and result.box.is_finite()
         self.box.publish(box_to_polygon(result.box if active else None, pixel_header(header)))
+        if active and not self._was_active:
+            self.tracks += 1
+        self._was_active = active
+        self.detections.publish(track_detections(result if active else None, header, str(self.tracks)))
         if active:
             pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
-            self.error.publish(pan_tilt_to_msg(pan, tilt, header))
+            angles = Header(stamp=header.stamp, frame_id=self.node.params.angles_frame_id)
+            self.error.publish(pan_tilt_to_msg(pan, tilt, angles))
             if motion is not None:
                 rate = target_rate(result.box.cx, result.box.cy, result.velocity, motion[0], intr, motion[1])
-                self.rate.publish(pan_tilt_to_msg(*rate, header))
+                self.rate.publish(pan_tilt_to_msg(*rate, angles))
         self.publish_state(header, result, intr.width, intr.height)
         for marker in track_markers(result, header):
             self.image_markers.publish(marker)
