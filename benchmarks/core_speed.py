@@ -497,6 +497,18 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
             trk.update(f)
             times.append(time.perf_counter() - t0)
         out[f"siamese_{version}"] = summarise(times, time.process_time() - c0)
+    # configuration `fused`: ECO and the v2 network side by side in the long-term tracker (policies/fusion.py)
+    from swir_tracker_ros.configs import configuration
+    from swir_tracker_ros.tracker import Tracker
+
+    trk = Tracker(configuration("fused"))
+    trk.init(frames[0], box)
+    times, c0 = [], time.process_time()
+    for f in frames[1:]:
+        t0 = time.perf_counter()
+        trk.update(f)
+        times.append(time.perf_counter() - t0)
+    out["fused"] = summarise(times, time.process_time() - c0)
     p = cv2.TrackerNano_Params()
     p.backbone, p.neckhead = str(locate(VERSIONS["v2"].backbone)), str(locate(VERSIONS["v2"].head))
     nano = cv2.TrackerNano_create(p)
@@ -513,6 +525,7 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
 
 SIAMESE_NAMES = {"siamese_v2": "ours Siamese v2 (core/siamese)",
                  "siamese_v3": "ours Siamese v3 (core/siamese)",
+                 "fused": "ours, configuration fused (ECO + v2)",
                  "opencv_nano": "OpenCV TrackerNano (v2 weights)"}
 
 
@@ -523,7 +536,7 @@ def print_siamese(res: dict, frames: int) -> None:
         r = res[key]
         print(f"  {label:46s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} {r['p95_ms']:8.2f} "
               f"{r['max_ms']:8.2f}")
-    for key in ("siamese_v2", "siamese_v3"):
+    for key in ("siamese_v2", "siamese_v3", "fused"):
         print(f"  ratio {key} / TrackerNano: {res[key]['fps'] / res['opencv_nano']['fps']:.2f} "
               f"(cpu {res[key]['cpu_fps'] / res['opencv_nano']['cpu_fps']:.2f})")
 

@@ -102,3 +102,21 @@ def test_missing_weights_fail_at_start_up(tmp_path, monkeypatch) -> None:
     with pytest.raises(ModelError, match="make models"):
         Tracker(configuration("fused"))
     Tracker(configuration("eco"))  # the correlation-filter configurations need no model
+
+
+def test_the_node_says_what_is_missing_and_how_to_get_it(tmp_path) -> None:
+    """`tracker` in configuration `fused` without the model files: exit 2 with one line naming the file and
+    the fix, no traceback."""
+    import os
+    import subprocess
+
+    from conftest import executable
+
+    env = dict(os.environ, **{ENV_VAR: str(tmp_path)})
+    run = subprocess.run([executable("tracker"), "--ros-args", "-p", "tracker.configuration:=fused"],
+                         env=env, capture_output=True, text=True, timeout=120)
+    out = run.stdout + run.stderr
+    assert run.returncode == 2, out
+    assert "Traceback" not in out
+    line = next(t for t in out.splitlines() if "cannot start" in t)
+    assert "nanotrack_backbone_sim.onnx is missing" in line and "make models" in line, line

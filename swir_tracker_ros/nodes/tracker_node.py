@@ -7,6 +7,7 @@ import dataclasses
 import sys
 import time
 
+import cv2
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
@@ -24,7 +25,7 @@ from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
 from swir_tracker_ros.configs import ConfigurationChoice
-from swir_tracker_ros.errors import TrackerError
+from swir_tracker_ros.errors import ModelError, ParameterError, TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
 from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
 from swir_tracker_ros.nodes.param_docs import params_yaml as render_params_file
@@ -60,7 +61,8 @@ class TrackerNode(Node):
         self.choice = bind_parameters(self, ConfigurationChoice, prefix=TRACKER_PREFIX)
         self.tracker_params = bind_parameters(self, self.choice.build(), prefix=TRACKER_PREFIX,
                                               on_change=self._on_tracker_params)
-        self.tracker = Tracker(self.tracker_params)
+        cv2.setNumThreads(self.params.threads)
+        self.tracker = Tracker(self.tracker_params)  # ModelError (one line, exit 2) without the model files
         with signals_deferred():  # a Ctrl-C inside numba's ctypes callbacks would be swallowed there
             Tracker.warm_up()  # the compiled loops load now (~1 s), not on the first tracked frame
         self.stats = FrameStats()
@@ -207,8 +209,12 @@ class TrackerNode(Node):
     def _on_tracker_params(self, params: TrackerParams) -> None:
         """New core parameters: a fresh core, re-initialised on the last box at the next frame."""
         self.selector.end(Verdict(Code.SUPERSEDED, "superseded by a change of the tracker parameters"))
-        self.tracker_params = params
-        self.tracker = Tracker(params)
+        try:
+            fresh = Tracker(params)
+        except ModelError as exc:
+            self.get_logger().error(f"tracker parameters not applied, the core keeps its own: {exc}")
+            return
+        self.tracker_params, self.tracker = params, fresh
         if self.pending_init is None and self.last_box is not None and self.last_result is not None \
                 and self.last_result.state in ACTIVE:
             self.pending_init = self.last_box
@@ -384,7 +390,7 @@ def main(argv: list[str] | None = None) -> int:
     if "--params-yaml" in user_arguments(args):
         sys.stdout.write(params_yaml())
         return 0
-    return run_node(NODE_NAME, TrackerNode, args, usage=usage)
+    return run_node(NODE_NAME, TrackerNode, args, startup_errors=(ParameterError, ModelError), usage=usage)
 
 
 if __name__ == "__main__":

@@ -93,6 +93,9 @@ class TrackerNodeParams:
         1.0, "Period of the /diagnostics report (rate, latency, drops).", 0.1, 60.0)
     warn_throttle_s: float = param(
         5.0, "Minimum interval between repeated warnings about bad input.", 0.0, 3600.0)
+    threads: int = param(
+        1, "OpenCV threads of the tracker (cv2.setNumThreads, read at start-up): the Siamese network's "
+        "inference and OpenCV's resampling; 0 = OpenCV's default (every core).", 0, 64, read_only=True)
 
     def validate(self) -> None:
         """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`)."""
