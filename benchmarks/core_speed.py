@@ -479,47 +479,40 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
     as BGR, converted outside the timed loop; ours replicates the channel inside it), one thread."""
     import cv2
 
+    from swir_tracker_ros.configs import configuration
     from swir_tracker_ros.core.siamese.locator import locate
     from swir_tracker_ros.core.siamese.params import VERSIONS, SiameseParams
     from swir_tracker_ros.core.siamese.tracker import SiameseTracker
     from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
+    from swir_tracker_ros.tracker import Tracker
 
     cv2.setNumThreads(1)
     frames = [read_frame(f) for f in frame_files(seq)[:n]]
     box = read_gt(seq)[0]
+
+    def timed(update, later: list) -> dict:
+        times, c0 = [], time.process_time()
+        for f in later:
+            t0 = time.perf_counter()
+            update(f)
+            times.append(time.perf_counter() - t0)
+        return summarise(times, time.process_time() - c0)
+
     out: dict[str, dict] = {}
     for version in VERSIONS:
         trk = SiameseTracker(SiameseParams(version=version))
         trk.init(frames[0], box)
-        times, c0 = [], time.process_time()
-        for f in frames[1:]:
-            t0 = time.perf_counter()
-            trk.update(f)
-            times.append(time.perf_counter() - t0)
-        out[f"siamese_{version}"] = summarise(times, time.process_time() - c0)
+        out[f"siamese_{version}"] = timed(trk.update, frames[1:])
     # configuration `fused`: ECO and the v2 network side by side in the long-term tracker (policies/fusion.py)
-    from swir_tracker_ros.configs import configuration
-    from swir_tracker_ros.tracker import Tracker
-
-    trk = Tracker(configuration("fused"))
-    trk.init(frames[0], box)
-    times, c0 = [], time.process_time()
-    for f in frames[1:]:
-        t0 = time.perf_counter()
-        trk.update(f)
-        times.append(time.perf_counter() - t0)
-    out["fused"] = summarise(times, time.process_time() - c0)
+    fused = Tracker(configuration("fused"))
+    fused.init(frames[0], box)
+    out["fused"] = timed(fused.update, frames[1:])
     p = cv2.TrackerNano_Params()
     p.backbone, p.neckhead = str(locate(VERSIONS["v2"].backbone)), str(locate(VERSIONS["v2"].head))
     nano = cv2.TrackerNano_create(p)
     bgr = [cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames]
     nano.init(bgr[0], tuple(round(v) for v in box.as_tuple()))
-    times, c0 = [], time.process_time()
-    for f in bgr[1:]:
-        t0 = time.perf_counter()
-        nano.update(f)
-        times.append(time.perf_counter() - t0)
-    out["opencv_nano"] = summarise(times, time.process_time() - c0)
+    out["opencv_nano"] = timed(nano.update, bgr[1:])
     return out
 
 

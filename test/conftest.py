@@ -35,6 +35,33 @@ def sequences_dir(shared_dir: Path) -> Path:
     return shared_dir / "data" / "sequences"
 
 
+CROSSING_FRAMES = 30  # otb_crossing frames the Siamese and fusion tests track
+
+
+@pytest.fixture(scope="session")
+def nanotrack_weights() -> None:
+    """Skip (with the reason) when the pinned NanoTrack weights are not installed (`make models`)."""
+    from swir_tracker_ros.core.siamese.locator import locate
+    from swir_tracker_ros.core.siamese.params import VERSIONS
+    from swir_tracker_ros.errors import ModelError
+
+    try:
+        for c in VERSIONS.values():
+            locate(c.backbone), locate(c.head)
+    except ModelError as exc:
+        pytest.skip(f"NanoTrack weights not installed ({exc})")
+
+
+@pytest.fixture(scope="session")
+def crossing_frames(sequences_dir: Path) -> tuple[list, list]:
+    """The first CROSSING_FRAMES frames of otb_crossing and their ground-truth boxes."""
+    from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
+
+    d = sequences_dir / "otb_crossing"
+    n = CROSSING_FRAMES
+    return [read_frame(f) for f in frame_files(d)[:n]], read_gt(d)[:n]
+
+
 def executable(name: str) -> str:
     """Path of an installed console script (the venv's bin, as `ros2 run` would find lib/<pkg>/<name>)."""
     path = BIN / name

@@ -5,36 +5,28 @@ the tracker, and the missing-weights error at start-up."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from conftest import CROSSING_FRAMES
 
 from swir_tracker_ros.configs import configuration
-from swir_tracker_ros.core.siamese.locator import ENV_VAR, locate
-from swir_tracker_ros.core.siamese.params import VERSIONS
+from swir_tracker_ros.core.siamese.locator import ENV_VAR
 from swir_tracker_ros.errors import ModelError
-from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
 from swir_tracker_ros.policies.fusion import FusionParams, NetworkFusion, box_iou, mean_box
 from swir_tracker_ros.tracker import Tracker
 from swir_tracker_ros.types import Box, TrackState
 
-N = 25
+N = CROSSING_FRAMES
 
 
-@pytest.fixture(scope="module", autouse=True)
-def models() -> None:
-    try:
-        c = VERSIONS["v2"]
-        locate(c.backbone), locate(c.head)
-    except ModelError as exc:
-        pytest.skip(f"NanoTrack weights not installed ({exc})")
+@pytest.fixture(autouse=True)
+def _weights(nanotrack_weights) -> None:
+    """Every test here needs the NanoTrack weights (conftest skips without them)."""
 
 
-@pytest.fixture(scope="module")
-def crossing(sequences_dir: Path) -> tuple[list[np.ndarray], list[Box]]:
-    d = sequences_dir / "otb_crossing"
-    return [read_frame(f) for f in frame_files(d)[:N]], read_gt(d)[:N]
+@pytest.fixture
+def crossing(crossing_frames):
+    return crossing_frames
 
 
 def test_box_iou_and_mean_box() -> None:

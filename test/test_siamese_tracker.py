@@ -10,31 +10,25 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from conftest import CROSSING_FRAMES
 
 from swir_tracker_ros.core.siamese.crops import context_side
-from swir_tracker_ros.core.siamese.locator import locate
-from swir_tracker_ros.core.siamese.params import VERSIONS, SiameseParams
+from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
-from swir_tracker_ros.errors import ModelError, TrackerError
-from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
+from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.types import Box
 
-N = 30  # frames
+N = CROSSING_FRAMES
 
 
-@pytest.fixture(scope="module", autouse=True)
-def models() -> None:
-    try:
-        for c in VERSIONS.values():
-            locate(c.backbone), locate(c.head)
-    except ModelError as exc:
-        pytest.skip(f"NanoTrack weights not installed ({exc})")
+@pytest.fixture(autouse=True)
+def _weights(nanotrack_weights) -> None:
+    """Every test here needs the NanoTrack weights (conftest skips without them)."""
 
 
-@pytest.fixture(scope="module")
-def crossing(sequences_dir: Path) -> tuple[list[np.ndarray], list[Box]]:
-    d = sequences_dir / "otb_crossing"
-    return [read_frame(f) for f in frame_files(d)[:N]], read_gt(d)[:N]
+@pytest.fixture
+def crossing(crossing_frames):
+    return crossing_frames
 
 
 @pytest.mark.parametrize(("version", "side"), [("v2", 16), ("v3", 15)])

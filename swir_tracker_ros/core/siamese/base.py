@@ -51,16 +51,16 @@ class SiameseBase(BaseFilter):
         # a window's side over the target's: the search crop 255 / 127 x the context side
         # sqrt((w + p)(h + p)), p = context (w + h), for a square target
         self.padding = fp.instance_size / fp.exemplar_size * (1.0 + 2.0 * fp.context_amount) - 1.0
-        self._frame: tuple[int, np.ndarray] | None = None
+        self._frame: tuple[object, np.ndarray] | None = None  # (the frame it was made of, 8-bit image)
         self._found: list[SiameseDetection] = []
 
     # ------------------------------------------------------------------ frames
     def _image(self, img: np.ndarray) -> np.ndarray:
         """The 8-bit image the network sees, from the tracker's conditioned [0, 1] frame (once a frame; a
         pre-smoothed frame's raw pixels: the network's crops are resampled to its own scale already)."""
-        if self._frame is None or self._frame[0] != id(img):
+        if self._frame is None or self._frame[0] is not img:  # the frame is held: no id reuse
             gray = img.raw if isinstance(img, SmoothedFrame) else np.asarray(img)
-            self._frame = (id(img), np.clip(gray * 255.0 + 0.5, 0.0, 255.0).astype(np.uint8))
+            self._frame = (img, np.clip(gray * 255.0 + 0.5, 0.0, 255.0).astype(np.uint8))
         return self._frame[1]
 
     def _target(self, window: Box) -> tuple[float, float, float, float]:
