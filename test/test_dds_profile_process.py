@@ -107,10 +107,15 @@ sub = node.create_subscription(CompressedImage, debug, lambda m: jpegs.append(le
 end = time.monotonic() + 2.0  # frames are flowing: select on the newest (stamp 0)
 while time.monotonic() < end:
     rclpy.spin_once(node, timeout_sec=0.05)
-future = client.call_async(SelectTarget.Request(box=RegionOfInterest(x_offset=x, y_offset=y, width=side,
-                                                                     height=side)))
-rclpy.spin_until_future_complete(node, future, timeout_sec=30.0)
-out["answer"] = list(selection_result(future.result())[:3]) if future.done() else None
+end = time.monotonic() + 30.0  # a loaded host: the head may not have its first frame yet, as it answers
+while True:
+    future = client.call_async(SelectTarget.Request(box=RegionOfInterest(x_offset=x, y_offset=y, width=side,
+                                                                         height=side)))
+    rclpy.spin_until_future_complete(node, future, timeout_sec=30.0)
+    out["answer"] = list(selection_result(future.result())[:3]) if future.done() else None
+    if out["answer"] is None or out["answer"][1] != "NO_FRAME" or time.monotonic() > end:
+        break
+    rclpy.spin_once(node, timeout_sec=0.5)
 end = time.monotonic() + 20.0
 while len(jpegs) < 3 and time.monotonic() < end:
     rclpy.spin_once(node, timeout_sec=0.05)
