@@ -19,14 +19,7 @@ from swir_tracker_ros.types import Box, TrackState
 N = CROSSING_FRAMES
 
 
-@pytest.fixture(autouse=True)
-def _weights(nanotrack_weights) -> None:
-    """Every test here needs the NanoTrack weights (conftest skips without them)."""
-
-
-@pytest.fixture
-def crossing(crossing_frames):
-    return crossing_frames
+pytestmark = pytest.mark.usefixtures("nanotrack_weights")  # conftest: skip without the weights
 
 
 def test_box_iou_and_mean_box() -> None:
@@ -37,8 +30,8 @@ def test_box_iou_and_mean_box() -> None:
     assert (m.cx, m.cy, m.w, m.h) == pytest.approx((17.5, 12.5, 20.0, 20.0))
 
 
-def test_which_tracker_gives_the_box(crossing) -> None:
-    frames, gt = crossing
+def test_which_tracker_gives_the_box(crossing_frames) -> None:
+    frames, gt = crossing_frames
     fusion = NetworkFusion(FusionParams())
     fusion.start(frames[0], gt[0], None)
     # agreement: the mean of the two, and the network continues from it
@@ -58,8 +51,8 @@ def test_which_tracker_gives_the_box(crossing) -> None:
     assert who == "network" and box.iou(gt[3]) > 0.5
 
 
-def test_fused_configuration_tracks_and_differs_from_the_filter_alone(crossing) -> None:
-    frames, gt = crossing
+def test_fused_configuration_tracks_and_differs_from_the_filter_alone(crossing_frames) -> None:
+    frames, gt = crossing_frames
     fused, alone = Tracker(configuration("fused")), Tracker(configuration("eco"))
     fused.init(frames[0], gt[0])
     alone.init(frames[0], gt[0])
@@ -71,11 +64,11 @@ def test_fused_configuration_tracks_and_differs_from_the_filter_alone(crossing) 
     assert moved == N - 1  # every frame's box is the mean of the two trackers'
 
 
-def test_siamese_base_filter_tracks_and_measures_its_aspect(crossing) -> None:
+def test_siamese_base_filter_tracks_and_measures_its_aspect(crossing_frames) -> None:
     """The network as the base filter of the long-term layers: the box follows the target with the
     network's own width and height (the crossing pedestrian's box is narrower than the start box's
     aspect ratio would keep: the first detections measure an aspect change)."""
-    frames, gt = crossing
+    frames, gt = crossing_frames
     trk = Tracker(configuration("siamese"))
     trk.init(frames[0], gt[0])
     ious, aspects = [], []

@@ -21,19 +21,12 @@ from swir_tracker_ros.types import Box
 N = CROSSING_FRAMES
 
 
-@pytest.fixture(autouse=True)
-def _weights(nanotrack_weights) -> None:
-    """Every test here needs the NanoTrack weights (conftest skips without them)."""
-
-
-@pytest.fixture
-def crossing(crossing_frames):
-    return crossing_frames
+pytestmark = pytest.mark.usefixtures("nanotrack_weights")  # conftest: skip without the weights
 
 
 @pytest.mark.parametrize(("version", "side"), [("v2", 16), ("v3", 15)])
-def test_follows_otb_crossing(crossing, version: str, side: int) -> None:
-    frames, gt = crossing
+def test_follows_otb_crossing(crossing_frames, version: str, side: int) -> None:
+    frames, gt = crossing_frames
     trk = SiameseTracker(SiameseParams(version=version))
     trk.init(frames[0], gt[0])
     for k in range(1, N):
@@ -45,8 +38,8 @@ def test_follows_otb_crossing(crossing, version: str, side: int) -> None:
         assert res.score > 0.5
 
 
-def test_search_refinds_a_displaced_target_and_keeps_the_state(crossing) -> None:
-    frames, gt = crossing
+def test_search_refinds_a_displaced_target_and_keeps_the_state(crossing_frames) -> None:
+    frames, gt = crossing_frames
     trk = SiameseTracker()
     trk.init(frames[0], gt[0])
     before = (trk.center, trk.size)
@@ -59,14 +52,14 @@ def test_search_refinds_a_displaced_target_and_keeps_the_state(crossing) -> None
     assert det.scale == pytest.approx(127 / s_z) and det.window.side == round(s_z * 255 / 127)
 
 
-def test_whole_pixel_mode_gives_the_stored_reference_boxes(crossing, shared_dir: Path) -> None:
+def test_whole_pixel_mode_gives_the_stored_reference_boxes(crossing_frames, shared_dir: Path) -> None:
     """The authors' placement reproduces nanotrack_v2_ref (their decoding, stored to 0.01 px) frame by frame,
     but for their half-pixel output convention (box = pixel-index centre - size/2)."""
     ref_file = shared_dir / "peers" / "nanotrack_v2_ref" / "otb_crossing" / "ope.txt"
     if not ref_file.is_file():
         pytest.skip(f"{ref_file} not there")
     ref = np.loadtxt(ref_file, delimiter=",")[:N]
-    frames, gt = crossing
+    frames, gt = crossing_frames
     trk = SiameseTracker(SiameseParams(subpixel_crops=False))
     trk.init(frames[0], gt[0])
     got = np.array([trk.update(f).box.as_tuple() for f in frames[1:]])
@@ -74,8 +67,8 @@ def test_whole_pixel_mode_gives_the_stored_reference_boxes(crossing, shared_dir:
     assert np.abs(got - ref[1:]).max() < 0.006
 
 
-def test_sixteen_bit_frames_go_through_the_conditioning(crossing) -> None:
-    frames, gt = crossing
+def test_sixteen_bit_frames_go_through_the_conditioning(crossing_frames) -> None:
+    frames, gt = crossing_frames
     deep = [(f.astype(np.uint16) * 64 + 1000) for f in frames[:6]]  # 14-bit-like with an offset
     trk = SiameseTracker()
     img = trk.prepare(deep[0])
@@ -87,8 +80,8 @@ def test_sixteen_bit_frames_go_through_the_conditioning(crossing) -> None:
     assert trk.prepare(bgr) is bgr
 
 
-def test_bad_input_is_a_tracker_error(crossing) -> None:
-    frames, gt = crossing
+def test_bad_input_is_a_tracker_error(crossing_frames) -> None:
+    frames, gt = crossing_frames
     trk = SiameseTracker()
     with pytest.raises(TrackerError, match="init"):
         trk.update(frames[1])
