@@ -77,7 +77,7 @@ class SiameseBase(BaseFilter):
     # ------------------------------------------------------------------ model
     def initialise(self, img: np.ndarray, box: Box) -> None:
         """The exemplar (127 px, context 0.5) of the start box: the template for the whole track."""
-        self.net._set_exemplar(self._image(img), box)
+        self.net.set_exemplar(self._image(img), box)
         self.net.center, self.net.size = box.center, (box.w, box.h)
 
     def train(self, img: np.ndarray, box: Box, rate: float) -> None:
@@ -103,7 +103,7 @@ class SiameseBase(BaseFilter):
         one wins)."""
         mid = len(windows) // 2
         cx, cy, w, h = self._target(windows[mid])
-        d = self.net._search(self._image(img), cx, cy, w, h)
+        d = self.net.search(self._image(img), cx, cy, w, h)
         self._found = [d] * len(windows)
         size = math.sqrt(d.smoothed.w * d.smoothed.h / (w * h))
         aspect = (d.smoothed.w / d.smoothed.h) / (w / h)
@@ -115,7 +115,7 @@ class SiameseBase(BaseFilter):
         """One search per window at its centre and target size (translation only)."""
         image = self._image(img)
         factors = scales if scales is not None else [1.0] * len(windows)
-        self._found = [self.net._search(image, *self._target(win)) for win in windows]
+        self._found = [self.net.search(image, *self._target(win)) for win in windows]
         return [self._detection(d, s, win) for d, s, win in zip(self._found, factors, windows)]
 
     # ------------------------------------------------------------------ long-term memory
