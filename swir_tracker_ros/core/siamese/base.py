@@ -22,7 +22,7 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 
 from swir_tracker_ros.core.base import BaseFilter
-from swir_tracker_ros.core.confidence import apce, psr
+from swir_tracker_ros.core.confidence import PSR_FAILURE, apce, psr
 from swir_tracker_ros.core.detection import Detection
 from swir_tracker_ros.core.features import SmoothedFrame
 from swir_tracker_ros.core.siamese.params import SiameseParams
@@ -87,7 +87,7 @@ class SiameseBase(BaseFilter):
     def failed(self, det: Detection) -> bool:
         """The score map's PSR below paper 000's 7 (module docstring); no state, so other windows can be
         tested too."""
-        return det.psr < 7.0
+        return det.psr < PSR_FAILURE
 
     def confident(self, det: Detection) -> bool:
         return True
