@@ -109,3 +109,10 @@ bench: $(STAMP) $(ISTAMP) $(BSTAMP)
 
 clean:
 	rm -rf $(VENV) $(BENCH) $(TRAIN) build install log out *.egg-info
+
+# Issue 44: the stored OPE runs of the development set (../shared/data/sequences + the corpus built from
+# ../shared/corpus, $SWIR_CORPUS or ../corpus) that `harness table` / `harness verdict` score (docs/harness.md).
+.PHONY: dev-runs
+DEV_RUNS_ARGS ?= --jobs 1
+dev-runs: $(STAMP) $(BSTAMP) models
+	nice -n 5 $(VPY) benchmarks/dev_runs.py $(DEV_RUNS_ARGS)

@@ -72,7 +72,9 @@ def test_eval_cli_json_and_plots(crossing_bag, tmp_path, capsys):
                      "--json", str(tmp_path / "t.json")]) == 0
     again = json.loads((tmp_path / "t.json").read_text())
     assert again["sequences"]["otb_crossing"] == data["sequences"]["otb_crossing"]
-    assert "OPE fold 1: AUC / P@20 / FT" in capsys.readouterr().out  # the fold of its name
+    out = capsys.readouterr().out
+    assert "OPE sequences: AUC / P@20 / FT" in out  # the group: the data folder it is in
+    assert "OPE sequences: gone recall / false loss / false tracking" in out
 
 
 def test_bag_and_folder_give_identical_scores(crossing_bag, sequences_dir, tmp_path):

@@ -58,7 +58,8 @@ def test_the_peers_scores_are_those_its_readme_gives(tmp_path, shared_dir, seque
     assert summ["sre_auc"] == pytest.approx(0.565, abs=5e-4)
     png = [s for s in seqs if any((sequences_dir / s).glob("*.png"))]
     assert len(png) == 10 and res.summary("ecohc_py", png)["ope_auc"] == pytest.approx(0.672, abs=5e-4)
-    assert {res.groups[s] for s in seqs} == {"fold 1", "fold 2"}
+    assert {res.groups[s] for s in seqs} == {"sequences"}  # the data folder's name
+    assert all(res.videos[s] == s for s in seqs)  # no meta.json "video": each is its own video
     # frames 2..N of every run are scored
     assert all(r.frames == len(read_gt(sequences_dir / "otb_bolt")) - 1
                for r in res.runs("otb_bolt", "ecohc_py").values())

@@ -202,9 +202,9 @@ def test_compare_protocol_cli_with_peers(tmp_path, sequences_dir, capsys):
     md = (tmp_path / "p.md").read_text()
     assert "| sequence | cf | opencv_kcf | ecohc_py |" in md and "| otb_crossing@8 | " in md
     out = capsys.readouterr().out
-    assert "OPE fold 1" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
+    assert "OPE sequences" in out and "opencv_kcf" in out and "SRE" not in out.split("MEAN")[0]
     data = json.loads(js.read_text())
-    assert set(data["summary"]["fold 1"]) == {"cf", "opencv_kcf", "ecohc_py"}
+    assert set(data["summary"]["sequences"]) == {"cf", "opencv_kcf", "ecohc_py"}
     assert data["sequences"]["otb_crossing@8"]["ecohc_py"][OPE]["frames"] == 7
     assert cli.main(["compare", str(sequences_dir / "otb_crossing"), "--protocol", "ope", "--peer-cache",
                      str(tmp_path)]) == 2

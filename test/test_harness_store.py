@@ -74,7 +74,7 @@ def test_scoring_from_storage_equals_scoring_the_run(stored, crossing):
         # the same boxes and states, scored the same; only the tracker's timing differs between two plays
         run.seconds = stored.load("cf", "otb_crossing@20", start, None if start == OPE else "otb").seconds
         assert results.runs("otb_crossing@20", "cf")[start] == RunStats.of(run, crossing.fps), start
-    assert results.groups == {"otb_crossing@20": "fold 1"}
+    assert results.groups == {"otb_crossing@20": "sequences"}
 
 
 def test_a_stored_run_is_taken_not_played_again(stored, crossing):

@@ -13,8 +13,15 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.harness.devset import DEFAULT_SEQUENCES as DEFAULT_SEQUENCES  # re-exported
+from swir_tracker_ros.harness.devset import (
+    SequenceInfo,
+    catalogue,
+    data_dirs,
+    group_of,
+    video_of,
+)
 from swir_tracker_ros.harness.evaluate import OPE, Run
-from swir_tracker_ros.harness.folds import folds, group_of
 from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS
 from swir_tracker_ros.harness.peers import PeerDirectory
 from swir_tracker_ros.harness.protocol import Results, RunStats
@@ -22,7 +29,6 @@ from swir_tracker_ros.harness.runner import frame_size, kind_of
 from swir_tracker_ros.harness.sources import open_source, read_gt, source_fingerprint
 from swir_tracker_ros.harness.store import REPO, RunRecord, RunStore, Truth, identity
 
-DEFAULT_SEQUENCES = REPO.parent / "shared" / "data" / "sequences"
 DEFAULT_PEERS = REPO.parent / "shared" / "peers"
 _MAKERS = ("tracker", "configuration", "overrides", "code", "numerics")  # what may not differ in one label
 
@@ -37,16 +43,16 @@ def folder_truth(folder: Path, max_frames: int | None = None) -> Truth:
     return Truth(src.key, kind_of(src), src.fps, gt, occ, [None] * len(gt), w, h, source_fingerprint(src))
 
 
-def truth_for(store: RunStore, sequence: str, data_dir: Path) -> Truth:
-    """The stored truth of a sequence key, else that of the data directory's folder of that name."""
+def truth_for(store: RunStore, sequence: str, infos: dict[str, SequenceInfo]) -> Truth:
+    """The stored truth of a sequence key, else that of the data folders' sequence of that name."""
     truth = store.load_truth(sequence)
     if truth is not None:
         return truth
     name, _, frames = sequence.partition("@")
-    folder = data_dir / name
-    if (folder / "gt.txt").is_file():
-        return folder_truth(folder, int(frames) if frames else None)
-    raise HarnessError(f"no stored truth for {sequence} in {store.root} and no folder {folder}")
+    if name in infos:
+        return folder_truth(infos[name].folder, int(frames) if frames else None)
+    raise HarnessError(f"no stored truth for {sequence} in {store.root} and no sequence folder {name} in the "
+                       "data folders (--data)")
 
 
 def _makers(rec: RunRecord) -> str:
@@ -55,10 +61,13 @@ def _makers(rec: RunRecord) -> str:
 
 
 def load_results(store: RunStore, labels: Sequence[str], sequences: Sequence[str] | None = None,
-                 starts: Sequence[str] | None = None, style: str = "otb", data_dir: Path = DEFAULT_SEQUENCES,
-                 peer_dir: Path = DEFAULT_PEERS, allow_mixed: bool = False) -> Results:
+                 starts: Sequence[str] | None = None, style: str = "otb",
+                 data: Path | Sequence[Path] | None = None, peer_dir: Path = DEFAULT_PEERS,
+                 allow_mixed: bool = False) -> Results:
     """Scores of the stored runs of `labels` on `sequences` (default: every sequence stored for them) from
-    `starts` (default: OPE and the 12 SRE starts of `style`). Sequences are grouped by fold (`folds`)."""
+    `starts` (default: OPE and the 12 SRE starts of `style`). `data`: the data folders (default: the
+    development set, `devset.data_dirs`); a sequence is grouped by the data folder it is in and belongs
+    to the video its meta.json names (`devset`)."""
     peers = PeerDirectory(peer_dir)
     stored = set(store.labels())
     for label in labels:
@@ -70,13 +79,14 @@ def load_results(store: RunStore, labels: Sequence[str], sequences: Sequence[str
         sequences = sorted({s for label in labels if label in stored for s in store.sequences(label)})
     if starts is None:
         starts = (OPE, *SRE_PERTURBATIONS)
-    fold = folds(data_dir)
+    infos = catalogue(data_dirs([data] if isinstance(data, (str, Path)) else data))
     results = Results(labels=list(labels))
     makers: dict[str, dict[str, tuple[str, str]]] = {label: {} for label in labels}
     meta: dict[str, dict] = {label: {"commits": set(), "codes": set()} for label in labels}
     for seq in sequences:
-        truth = truth_for(store, seq, data_dir)
-        results.groups[seq] = group_of(seq, truth.kind, fold)
+        truth = truth_for(store, seq, infos)
+        results.groups[seq] = group_of(seq, truth.kind, infos)
+        results.videos[seq] = video_of(seq, infos)
         for label in labels:
             for start in starts:
                 st = None if start == OPE else style

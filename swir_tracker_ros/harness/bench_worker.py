@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Runs one OpenCV tracker (KCF, CSRT, MOSSE) over one source inside .venv-bench; prints JSON to stdout.
+"""Runs one OpenCV tracker (KCF, CSRT, MOSSE, Nano) over one source inside .venv-bench; prints JSON to stdout.
 
 Started by `harness compare` as `.venv-bench/bin/python -m swir_tracker_ros.harness.bench_worker` with the
 repository on PYTHONPATH; imports only numpy, cv2 (opencv-contrib), rosbags and this package's plain parts.
@@ -7,6 +7,8 @@ repository on PYTHONPATH; imports only numpy, cv2 (opencv-contrib), rosbags and 
 One process runs several starts of the same tracker side by side over one decoding of the frames: the OPE
 start (`none`, the ground-truth box of the first frame with ground truth) and any SRE perturbations
 (`--perturb left scale_0.8 ...`, boxes from `metrics.sre_box`), or one explicit start box (`--init`).
+`Nano` (OpenCV's TrackerNano, NanoTrack through the DNN module) needs its two ONNX files, `--backbone` and
+`--neckhead` (the harness passes the pinned v2 files that core/siamese/locator.py finds).
 """
 
 from __future__ import annotations
@@ -24,10 +26,21 @@ from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS, SRE_STYLES, sre_
 from swir_tracker_ros.harness.sources import open_source
 from swir_tracker_ros.types import Box
 
-FACTORIES = {
-    "KCF": lambda: cv2.TrackerKCF_create(),
-    "CSRT": lambda: cv2.TrackerCSRT_create(),
-    "MOSSE": lambda: cv2.legacy.TrackerMOSSE_create(),
+
+def _nano(models: dict[str, str]) -> object:
+    """OpenCV's TrackerNano on the given backbone and neck-head ONNX files."""
+    if not models.get("backbone") or not models.get("neckhead"):
+        raise HarnessError("the Nano tracker needs --backbone and --neckhead (NanoTrack ONNX files)")
+    params = cv2.TrackerNano_Params()
+    params.backbone, params.neckhead = models["backbone"], models["neckhead"]
+    return cv2.TrackerNano_create(params)
+
+
+FACTORIES = {  # tracker name -> constructor taking the model files (only Nano uses them)
+    "KCF": lambda models: cv2.TrackerKCF_create(),
+    "CSRT": lambda models: cv2.TrackerCSRT_create(),
+    "MOSSE": lambda models: cv2.legacy.TrackerMOSSE_create(),
+    "Nano": _nano,
 }
 WORKER_VERSION = 3  # part of the peer-cache key: bump when a change here changes the boxes
 
@@ -49,8 +62,9 @@ def cv_rect(box: Box) -> tuple[int, int, int, int]:
 
 
 def run(spec: str, name: str, max_frames: int | None, perturbations: list[str] | None = None,
-        init: Box | None = None, style: str = "otb") -> dict:
-    """Every start's per-frame boxes and ok flags, the shared ground truth, occlusion flags and shares."""
+        init: Box | None = None, style: str = "otb", models: dict[str, str] | None = None) -> dict:
+    """Every start's per-frame boxes and ok flags, the shared ground truth, occlusion flags and shares;
+    `models`: the ONNX files of a tracker that needs them (Nano: backbone, neckhead)."""
     src = open_source(spec, max_frames=max_frames)
     starts = ["init"] if init is not None else (perturbations or ["none"])
     trackers: dict[str, object] = {}
@@ -70,7 +84,7 @@ def run(spec: str, name: str, max_frames: int | None, perturbations: list[str] |
             h, w = img.shape[:2]
             for p, r in runs.items():
                 box = init if init is not None else sre_box(fr.gt, p, w, h, style)
-                trk = FACTORIES[name]()
+                trk = FACTORIES[name](models or {})
                 t0 = time.perf_counter()
                 trk.init(img, cv_rect(box))
                 r["seconds"] += time.perf_counter() - t0
@@ -103,6 +117,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="starts to run side by side (none = the ground-truth box; default: none)")
     ap.add_argument("--style", choices=SRE_STYLES, default="otb", help="SRE box definition (metrics.sre_box)")
     ap.add_argument("--init", default=None, metavar="X,Y,W,H", help="one explicit start box instead")
+    ap.add_argument("--backbone", default=None, help="Nano: the backbone ONNX file")
+    ap.add_argument("--neckhead", default=None, help="Nano: the neck-head ONNX file")
     args = ap.parse_args(argv)
     try:
         init = None
@@ -111,7 +127,9 @@ def main(argv: list[str] | None = None) -> int:
                 init = Box(*(float(v) for v in args.init.split(",")))
             except (TypeError, ValueError):
                 raise HarnessError(f"--init wants X,Y,W,H, got {args.init!r}") from None
-        json.dump(run(args.source, args.tracker, args.frames, args.perturb, init, args.style), sys.stdout)
+        models = {"backbone": args.backbone, "neckhead": args.neckhead}
+        json.dump(run(args.source, args.tracker, args.frames, args.perturb, init, args.style, models),
+                  sys.stdout)
     except HarnessError as exc:
         print(f"bench_worker: {exc}", file=sys.stderr)
         return 2

@@ -15,8 +15,8 @@ from swir_tracker_ros.harness import commands
 from swir_tracker_ros.harness.analysis import DEFAULT_PEERS, DEFAULT_SEQUENCES
 from swir_tracker_ros.harness.bagio import FrameRecord, bag_info, write_bag
 from swir_tracker_ros.harness.compare import OPENCV_TRACKERS
+from swir_tracker_ros.harness.devset import CORPUS_ENV, DEV
 from swir_tracker_ros.harness.evaluate import DEFAULT, OPE, configurations
-from swir_tracker_ros.harness.gate import GATED
 from swir_tracker_ros.harness.metrics import SRE_STYLES
 from swir_tracker_ros.harness.numerics import ENVIRONMENTS
 from swir_tracker_ros.harness.protocol import Results
@@ -24,6 +24,7 @@ from swir_tracker_ros.harness.regress import REGRESSION_DIR
 from swir_tracker_ros.harness.runner import PROTOCOLS
 from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, convert_bits, open_source
 from swir_tracker_ros.harness.tables import format_eval
+from swir_tracker_ros.harness.verdict import KEEP_SE, METRICS
 from swir_tracker_ros.scene import scenarios
 from swir_tracker_ros.scene.camera import CameraView
 from swir_tracker_ros.scene.scenarios import make_scenario
@@ -120,8 +121,11 @@ def _stored_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--results", default=None,
                    help="results directory of the stored runs (default: $SWIR_RESULTS or "
                         f"{commands.DEFAULT_RESULTS})")
-    p.add_argument("--data", dest="data_dir", default=str(DEFAULT_SEQUENCES),
-                   help="the sequence folders: their sorted names give the two folds (default: %(default)s)")
+    p.add_argument("--data", nargs="+", action="extend", default=None, metavar="DIR",
+                   help=f"data folders (folders of sequence folders; repeatable): the groups of the tables, "
+                        f"the videos of the verdict, the sequences of SRC `{DEV}`; `{DEV}` or nothing: the "
+                        f"development set, {DEFAULT_SEQUENCES} and the built corpus (${CORPUS_ENV}, else "
+                        "../corpus beside the repository)")
     p.add_argument("--peer-dir", default=str(DEFAULT_PEERS),
                    help="stored runs of trackers outside the project, e.g. ecohc_py (default: %(default)s)")
     p.add_argument("--sre-style", choices=SRE_STYLES, default="otb",
@@ -137,7 +141,8 @@ def _evaluation_parsers(sub: argparse._SubParsersAction) -> None:
 
     def eval_args(p: argparse.ArgumentParser) -> None:
         p.add_argument("bags", nargs="+",
-                       help="bags, sequence folders, a folder of them, synth:NAME, synth:all")
+                       help=f"bags, sequence folders, a folder of them, synth:NAME, synth:all, {DEV} (every "
+                            "sequence of --data: by default the development set)")
         p.add_argument("--tracker", "--configuration", nargs="*", choices=names, default=None, dest="tracker",
                        help="our configurations (default: all; `compare --tracker` alone: peers only)")
         p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
@@ -188,12 +193,14 @@ def _evaluation_parsers(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=commands.cmd_table, image_topic=None, gt_topic=None)
 
     p = sub.add_parser("verdict",
-                       help="two stored configurations on both folds (SRE): change, noise, verdict")
-    p.add_argument("base", help="stored label of the current default")
+                       help=f"two stored trackers paired over videos (OPE): per-video difference, SE, "
+                            f"the call (keep only when the mean gain > {KEEP_SE:g} SE)")
+    p.add_argument("base",
+                   help=f"stored label of the current choice (`{DEFAULT}`: the default configuration's)")
     p.add_argument("candidate", help="stored label of the change")
-    p.add_argument("--metric", choices=GATED, default="success_auc")
+    p.add_argument("--metric", choices=METRICS, default="success_auc")
     p.add_argument("--on", dest="bags", nargs="*", default=None, metavar="SRC",
-                   help="only these sources' runs (default: every sequence stored for both)")
+                   help="only these sources' runs (default: every sequence of --data stored for either)")
     p.add_argument("--frames", type=int, default=None)
     p.add_argument("--allow-mixed", action="store_true")
     _stored_args(p)

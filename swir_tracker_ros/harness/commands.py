@@ -14,9 +14,9 @@ from pathlib import Path
 
 from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness.analysis import DEFAULT_SEQUENCES, load_results
-from swir_tracker_ros.harness.compare import OPENCV_TRACKERS
-from swir_tracker_ros.harness.evaluate import OPE, configurations, default_configuration
-from swir_tracker_ros.harness.folds import fold_changes, format_verdict
+from swir_tracker_ros.harness.compare import OPENCV_DEFAULT
+from swir_tracker_ros.harness.devset import DEV, data_dirs, sequence_folders
+from swir_tracker_ros.harness.evaluate import DEFAULT, OPE, configurations, default_configuration
 from swir_tracker_ros.harness.gate import GateConfig, check, format_gate, load_config
 from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS
 from swir_tracker_ros.harness.numerics import check_names
@@ -33,6 +33,7 @@ from swir_tracker_ros.harness.runner import Player, play, protocol_starts
 from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, open_source
 from swir_tracker_ros.harness.store import RunStore
 from swir_tracker_ros.harness.tables import format_eval, format_markdown, format_text
+from swir_tracker_ros.harness.verdict import format_verdict, paired_verdict
 from swir_tracker_ros.scene import scenarios
 
 DEFAULT_RESULTS = "out/results"
@@ -48,12 +49,15 @@ def progress(a: argparse.Namespace) -> Callable[[str], None] | None:
 
 
 def sources(a: argparse.Namespace) -> list[Source]:
-    """The sources named on the command line: bags, sequence folders, folders of them, synth:NAME and
-    synth:all."""
+    """The sources named on the command line: bags, sequence folders, folders of them, synth:NAME,
+    synth:all and `dev` (every sequence of the data folders, `--data`: by default the development set)."""
     out = []
     for spec in a.bags:
         if spec == SYNTH_PREFIX + "all":  # every synthetic scenario (`harness synth --list`)
             out += [open_source(SYNTH_PREFIX + n, a.frames) for n in scenarios()]
+            continue
+        if spec == DEV:
+            out += [open_source(f, a.frames) for f in sequence_folders(data_dirs(a.data)).values()]
             continue
         p = Path(spec)
         if p.is_dir() and not (p / "gt.txt").exists() and not (p / "metadata.yaml").exists() \
@@ -89,7 +93,7 @@ def _play_and_load(a: argparse.Namespace, ours: list[Player], peers: list[str], 
     everyone = ours + [Player.opencv(t) for t in peers]
     play(srcs, everyone, starts, style, store, a.jobs, a.rerun, progress(a))
     labels = [p.label for p in everyone] + list(getattr(a, "peers", None) or [])
-    return load_results(store, labels, [s.key for s in srcs], starts, style, Path(a.data_dir),
+    return load_results(store, labels, [s.key for s in srcs], starts, style, data_dirs(a.data),
                         Path(a.peer_dir))
 
 
@@ -122,7 +126,7 @@ def cmd_compare(a: argparse.Namespace) -> int:
     _gone(a)
     if a.protocol is None:
         names = list(configurations()) if a.tracker is None else a.tracker
-        peers = list(OPENCV_TRACKERS) if a.opencv is None else a.opencv
+        peers = list(OPENCV_DEFAULT) if a.opencv is None else a.opencv
         _finish_eval(_play_and_load(a, players(a, names), peers, (OPE,), "otb"), a)
         return 0
     if a.plots or a.curves:
@@ -142,15 +146,24 @@ def _print_tables(results: Results, a: argparse.Namespace) -> None:
     _write_json(a.json, results)
 
 
-def _stored(a: argparse.Namespace, labels: list[str], starts: tuple[str, ...]) -> Results:
-    keys = [s.key for s in sources(a)] if a.bags else None
-    return load_results(results_dir(a), labels, keys, starts, a.sre_style, Path(a.data_dir), Path(a.peer_dir),
-                        a.allow_mixed)
+def stored_label(label: str, store: RunStore) -> str:
+    """A label as given, or for `default` (when nothing is stored under that name) the default
+    configuration's own label."""
+    return default_configuration() if label == DEFAULT and label not in store.labels() else label
+
+
+def _stored(a: argparse.Namespace, labels: list[str], starts: tuple[str, ...],
+            keys: list[str] | None = None) -> Results:
+    if keys is None and a.bags:
+        keys = [s.key for s in sources(a)]
+    return load_results(results_dir(a), labels, keys, starts, a.sre_style, data_dirs(a.data),
+                        Path(a.peer_dir), a.allow_mixed)
 
 
 def cmd_table(a: argparse.Namespace) -> int:
     """Tables of stored runs only (nothing is played)."""
-    results = _stored(a, a.labels, protocol_starts(a.protocol))
+    labels = [stored_label(t, results_dir(a)) for t in a.labels]
+    results = _stored(a, labels, protocol_starts(a.protocol))
     if not results.stats:
         raise HarnessError(f"no stored runs of {', '.join(a.labels)} in {results_dir(a).root}")
     _print_tables(results, a)
@@ -158,10 +171,24 @@ def cmd_table(a: argparse.Namespace) -> int:
 
 
 def cmd_verdict(a: argparse.Namespace) -> int:
-    """Two stored configurations on both folds (SRE) and the team's rule."""
-    results = _stored(a, [a.base, a.candidate], SRE_PERTURBATIONS)
-    print(format_verdict(a.base, a.candidate, fold_changes(results, a.base, a.candidate, metric=a.metric),
-                         a.metric))
+    """Two stored trackers paired over the videos of the data folders (OPE), the SRE view beside, and the
+    call (`verdict.py`); --json writes it."""
+    store = results_dir(a)
+    base, cand = stored_label(a.base, store), stored_label(a.candidate, store)
+    keys = None
+    if not a.bags:  # the data folders' sequences stored for either (the others are no pair)
+        stored = set(store.sequences(base)) | set(store.sequences(cand))
+        keys = [k for k in sequence_folders(data_dirs(a.data)) if k in stored]
+        if not keys:
+            raise HarnessError(f"no stored run of {base} or {cand} in {store.root} on the sequences of "
+                               f"{', '.join(str(d) for d in data_dirs(a.data))}")
+    results = _stored(a, [base, cand], (OPE, *SRE_PERTURBATIONS), keys)
+    verdict = paired_verdict(results, base, cand, a.metric, keys or list(results.stats))
+    print(format_verdict(verdict))
+    if a.json:
+        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.json).write_text(json.dumps(verdict.to_json(), indent=1))
+        print(f"wrote {a.json}")
     return 0
 
 

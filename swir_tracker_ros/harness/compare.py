@@ -1,8 +1,11 @@
 # SPDX-License-Identifier: Apache-2.0
-"""OpenCV's KCF, CSRT and MOSSE as peers, run in the separate .venv-bench by `bench_worker` subprocesses.
+"""OpenCV's KCF, CSRT, MOSSE and Nano (TrackerNano: NanoTrack through OpenCV's DNN module) as peers, run in
+the separate .venv-bench by `bench_worker` subprocesses.
 
 Their runs are stored in the results directory like ours (`runner.play`), under the labels `opencv_kcf`,
-`opencv_csrt`, `opencv_mosse`; the OpenCV version and the worker's version are their provenance's code.
+`opencv_csrt`, `opencv_mosse`, `opencv_nano`; the OpenCV version and the worker's version are their
+provenance's code, for Nano also the pinned NanoTrack files it was given (`NANO_VERSION`, found by
+core/siamese/locator.py).
 """
 
 from __future__ import annotations
@@ -14,7 +17,9 @@ from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
 
-from swir_tracker_ros.errors import HarnessError
+from swir_tracker_ros.core.siamese.locator import locate
+from swir_tracker_ros.core.siamese.params import VERSIONS as SIAMESE_VERSIONS
+from swir_tracker_ros.errors import HarnessError, ModelError
 from swir_tracker_ros.harness.bench_worker import WORKER_VERSION
 from swir_tracker_ros.harness.evaluate import OPE, Run
 from swir_tracker_ros.harness.sources import Source
@@ -22,7 +27,9 @@ from swir_tracker_ros.harness.store import REPO
 from swir_tracker_ros.types import Box
 
 BENCH = REPO / ".venv-bench"
-OPENCV_TRACKERS = ("KCF", "CSRT", "MOSSE")
+OPENCV_TRACKERS = ("KCF", "CSRT", "MOSSE", "Nano")
+OPENCV_DEFAULT = ("KCF", "CSRT", "MOSSE")  # what a plain `harness compare` plays beside ours
+NANO_VERSION = "v2"  # the NanoTrack weights OpenCV's TrackerNano is given (the pinned v2 ONNX files)
 PEER_PREFIX = "opencv_"
 
 
@@ -57,9 +64,21 @@ def opencv_version(py: Path) -> str:
     return proc.stdout.strip()
 
 
-def opencv_code(py: Path) -> str:
-    """What produces an OpenCV peer's boxes: the OpenCV build and the worker's version."""
-    return f"opencv-{opencv_version(py)}/bench_worker-{WORKER_VERSION}"
+def nano_models() -> dict[str, str]:
+    """The backbone and neck-head ONNX files of `NANO_VERSION` (checked by the locator); HarnessError when
+    they are missing or corrupt."""
+    pin = SIAMESE_VERSIONS[NANO_VERSION]
+    try:
+        return {"backbone": str(locate(pin.backbone)), "neckhead": str(locate(pin.head))}
+    except ModelError as exc:
+        raise HarnessError(str(exc)) from None
+
+
+def opencv_code(py: Path, tracker: str | None = None) -> str:
+    """What produces an OpenCV peer's boxes: the OpenCV build and the worker's version (Nano: and the
+    pinned NanoTrack version it is given)."""
+    code = f"opencv-{opencv_version(py)}/bench_worker-{WORKER_VERSION}"
+    return code + f"/nanotrack-{NANO_VERSION}" if tracker == "Nano" else code
 
 
 def _spec(src: Source) -> str:
@@ -97,6 +116,9 @@ def _worker_json(src: Source, tracker: str, py: Path, starts: Sequence[str], sty
     env["PYTHONPATH"] = str(REPO) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     cmd = [str(py), "-m", "swir_tracker_ros.harness.bench_worker", _spec(src), "--tracker", tracker,
            "--style", style]
+    if tracker == "Nano":
+        models = nano_models()
+        cmd += ["--backbone", models["backbone"], "--neckhead", models["neckhead"]]
     if init is not None:
         cmd += ["--init", ",".join(repr(v) for v in init.as_tuple())]
     else:

@@ -252,6 +252,56 @@ def false_tracking(states: Sequence[str], pred: Sequence[Box | None], gt: Sequen
                if s == "tracking" and g is not None and (p is None or not p.is_finite() or p.iou(g) <= 0.0))
 
 
+GONE_STATES = frozenset({"occluded", "lost"})  # states in which a tracker says its target is not visible
+FALSE_TRACKING_IOU = 0.1  # a `tracking` frame below this IoU is false tracking (the absent-frame rates)
+
+
+@dataclass(frozen=True)
+class Absence:
+    """How a run treats the target's absence, frames after the start only (`absence`).
+
+    absent: frames without ground truth (the target is not visible; gt.txt `0,0,0,0`); gone: of those, the
+    frames the tracker said gone (state `occluded` or `lost`). present: frames with ground truth; false_loss:
+    of those, the frames said gone; false_tracking: the frames in state `tracking` with IoU < 0.1 (or no
+    box)."""
+
+    absent: int = 0
+    gone: int = 0
+    present: int = 0
+    false_loss: int = 0
+    false_tracking: int = 0
+
+    @property
+    def gone_recall(self) -> float | None:
+        """gone / absent (None without absent frames)."""
+        return self.gone / self.absent if self.absent else None
+
+    @property
+    def false_loss_rate(self) -> float | None:
+        return self.false_loss / self.present if self.present else None
+
+    @property
+    def false_tracking_rate(self) -> float | None:
+        return self.false_tracking / self.present if self.present else None
+
+
+def absence(states: Sequence[str], pred: Sequence[Box | None], gt: Sequence[Box | None],
+            start: int = 0) -> Absence:
+    """`Absence` of a run over the frames after `start` (the start frame is no claim of the tracker)."""
+    if not len(states) == len(pred) == len(gt):
+        raise HarnessError(f"{len(states)} states, {len(pred)} boxes, {len(gt)} ground-truth frames")
+    absent = gone = present = lost = false = 0
+    for s, p, g in list(zip(states, pred, gt))[start + 1:]:
+        if g is None:
+            absent += 1
+            gone += s in GONE_STATES
+            continue
+        present += 1
+        lost += s in GONE_STATES
+        false += s == "tracking" and (p is None or not p.is_finite() or p.iou(g) < FALSE_TRACKING_IOU)
+    return Absence(absent, gone, present, lost, false)
+
+
 def zero_overlap(pred: Sequence[Box | None], gt: Sequence[Box | None]) -> int:
     """Frames with ground truth where the tracker's box (whatever its state) has IoU 0 or is absent."""
     return int(np.sum(overlaps(pred, gt) <= 0.0))

@@ -6,8 +6,12 @@ frame with ground truth; SRE (Wu et al., CVPR 2013) from 12 perturbed boxes (`me
 is scored on the frames AFTER its start frame (frames 2..N): success AUC over the IoU thresholds
 0:0.05:1 and precision at 20 px, a frame on which the tracker reports failure keeping its last box
 (`metrics.scored_boxes`); plus false tracking (state `tracking` with IoU 0), frames with IoU 0, and on
-synthetic scenarios the occlusions survived. `Results` holds the scores of stored runs by sequence, label
-and start, in groups of sequences (folds, synthetic scenarios), and computes the per-group means.
+synthetic scenarios the occlusions survived. Frames without ground truth (the target is not visible) are
+scored apart (`metrics.absence`): AUC and precision are over the frames with ground truth only; on the
+absent frames the recall of "gone" (state `occluded` or `lost`), on the present ones the false-loss rate
+(said gone) and the false-tracking rate (`tracking` with IoU < 0.1). `Results` holds the scores of stored
+runs by sequence, label and start, in groups of sequences (data folders, synthetic scenarios), the video
+of each sequence, and computes the per-group means.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import numpy as np
 from swir_tracker_ros.harness.evaluate import OPE, Run
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
+    absence,
     auc,
     carried_truth,
     false_tracking,
@@ -52,6 +57,10 @@ class RunStats:
     floor_auc: float | None = None  # AUC of the carried truth itself: exact tracking of the start's box
     center_error: float | None = None  # mean centre error (px) over frames with a box; None: no such frame
     occluded_precision_20: float | None = None  # precision at 20 px on frames flagged occluded
+    absent: int = 0  # frames after the start without ground truth (target not visible; metrics.absence)
+    gone: int = 0  # of those, frames the tracker said gone (occluded or lost)
+    false_loss: int = 0  # frames with ground truth said gone
+    false_tracking_01: int = 0  # frames with ground truth in state tracking with IoU < 0.1
     precision_curve: list[float] = field(default_factory=list, repr=False)
     success_curve: list[float] = field(default_factory=list, repr=False)
 
@@ -72,13 +81,32 @@ class RunStats:
             truth = carried_truth(run.init, ref, gt)
             carried = auc(success_curve(overlaps(pred, truth)))
             floor = auc(success_curve(overlaps(truth, gt)))
+        gone = absence(states, pred, run.gt, run.init_index)
         return cls(s.success_auc, s.precision_20, false_tracking(states, pred, gt), zero_overlap(pred, gt),
                    s.frames, s.fps, len(episodes), occlusions_survived(episodes, states, pred, gt, fps),
                    carried, floor, s.center_error if math.isfinite(s.center_error) else None,
-                   s.occluded_precision_20, s.precision_curve, s.success_curve)
+                   s.occluded_precision_20, gone.absent, gone.gone, gone.false_loss, gone.false_tracking,
+                   s.precision_curve, s.success_curve)
+
+    @property
+    def gone_recall(self) -> float | None:
+        """Share of the absent frames the tracker said gone (None without absent frames)."""
+        return self.gone / self.absent if self.absent else None
+
+    @property
+    def false_loss_rate(self) -> float | None:
+        """Share of the frames with ground truth the tracker said gone."""
+        return self.false_loss / self.frames if self.frames else None
+
+    @property
+    def false_tracking_rate(self) -> float | None:
+        """Share of the frames with ground truth in state tracking with IoU < 0.1."""
+        return self.false_tracking_01 / self.frames if self.frames else None
 
     def to_json(self, curves: bool = False) -> dict:
         d = asdict(self)
+        d.update(gone_recall=self.gone_recall, false_loss_rate=self.false_loss_rate,
+                 false_tracking_rate=self.false_tracking_rate)
         if not curves:
             for c in CURVES:
                 d.pop(c)
@@ -107,7 +135,8 @@ class Results:
     """Scores of stored runs: stats[sequence][label][start], the group of each sequence, per-label meta."""
 
     stats: dict[str, dict[str, dict[str, RunStats]]] = field(default_factory=dict)
-    groups: dict[str, str] = field(default_factory=dict)  # sequence -> "fold 1", "fold 2", "synthetic", ...
+    groups: dict[str, str] = field(default_factory=dict)  # sequence -> data folder, "synthetic", "other"
+    videos: dict[str, str] = field(default_factory=dict)  # sequence -> video (devset.video_of)
     labels: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
 
@@ -170,7 +199,13 @@ class Results:
                        ope_false_tracking=sum(r.false_tracking for r in ope),
                        ope_zero_iou=sum(r.zero_iou for r in ope),
                        ope_occlusions=sum(r.occlusions for r in ope),
-                       ope_survived=sum(r.survived for r in ope), ope_runs=len(ope))
+                       ope_survived=sum(r.survived for r in ope), ope_runs=len(ope),
+                       ope_false_loss=_mean([r.false_loss_rate or 0.0 for r in ope]),
+                       ope_false_tracking_rate=_mean([r.false_tracking_rate or 0.0 for r in ope]),
+                       ope_absent=sum(r.absent for r in ope))
+            gone = [r.gone_recall for r in ope if r.gone_recall is not None]
+            if gone:  # each sequence with absent frames weighs the same
+                out.update(ope_gone_recall=_mean(gone), ope_gone_sequences=len(gone))
             if fps:
                 out["fps"] = _mean(fps)
         if sre:
@@ -191,7 +226,7 @@ class Results:
         return out
 
     def to_json(self, curves: bool = False) -> dict:
-        return {"labels": self.labels, "meta": self.meta, "groups": self.groups,
+        return {"labels": self.labels, "meta": self.meta, "groups": self.groups, "videos": self.videos,
                 "summary": {g: {t: self.summary(t, s) for t in self.labels}
                             for g, s in self.by_group().items()},
                 "sequences": {seq: {t: {k: r.to_json(curves) for k, r in runs.items()}
@@ -200,7 +235,8 @@ class Results:
     @classmethod
     def from_json(cls, data: dict) -> Results:
         """Inverse of `to_json` (the summaries are recomputed)."""
-        out = cls(groups=dict(data.get("groups", {})), labels=list(data["labels"]),
+        out = cls(groups=dict(data.get("groups", {})), videos=dict(data.get("videos", {})),
+                  labels=list(data["labels"]),
                   meta=dict(data.get("meta", {})))
         for seq, per in data["sequences"].items():
             for label, runs in per.items():

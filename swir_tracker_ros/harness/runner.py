@@ -23,7 +23,13 @@ from swir_tracker_ros.core.siamese.params import VERSIONS as SIAMESE_VERSIONS
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
 from swir_tracker_ros.errors import HarnessError, ModelError
-from swir_tracker_ros.harness.compare import bench_python, opencv_code, opencv_label, run_worker
+from swir_tracker_ros.harness.compare import (
+    bench_python,
+    nano_models,
+    opencv_code,
+    opencv_label,
+    run_worker,
+)
 from swir_tracker_ros.harness.evaluate import (
     OPE,
     Run,
@@ -45,7 +51,7 @@ from swir_tracker_ros.harness.store import (
 
 PROTOCOLS = ("ope", "sre")
 WHOLE_PIXEL = "-wholepixel"  # Siamese configuration suffix: the authors' whole-pixel crops
-_COST = {"CSRT": 0, "swir": 1, "KCF": 2, "MOSSE": 3}  # slowest first (better packing on --jobs)
+_COST = {"CSRT": 0, "swir": 1, "Nano": 2, "KCF": 3, "MOSSE": 4}  # slowest first (better packing on --jobs)
 
 
 def protocol_starts(protocols: Sequence[str]) -> tuple[str, ...]:
@@ -82,6 +88,9 @@ class Player:
 
     @classmethod
     def opencv(cls, tracker: str) -> Player:
+        """An OpenCV tracker (compare.OPENCV_TRACKERS); Nano's model files are checked now."""
+        if tracker == "Nano":
+            nano_models()  # fail now on missing weights, not in a pool worker
         return cls(opencv_label(tracker), "opencv", tracker)
 
     @classmethod
@@ -101,7 +110,7 @@ class Player:
         return cls(f"siamese_{conf.replace('-', '_')}", "network", conf)
 
     def code(self) -> str:
-        return opencv_code(bench_python()) if self.tracker == "opencv" else code_hash()
+        return opencv_code(bench_python(), self.configuration) if self.tracker == "opencv" else code_hash()
 
     def provenance(self, src: Source, style: str | None) -> dict:
         return {"tracker": self.tracker, "configuration": self.configuration,

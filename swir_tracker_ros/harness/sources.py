@@ -112,7 +112,35 @@ def read_meta_json(path: Path) -> dict:
     if occ is not None and (not isinstance(occ, list)
                             or not all(isinstance(f, int) and not isinstance(f, bool) for f in occ)):
         raise HarnessError(f'{path}: "occlusion_frames" must be a list of frame numbers, got {occ!r}')
+    _check_corpus_meta(meta, path)
     return meta
+
+
+def absent_frames(meta: dict) -> tuple[int, ...]:
+    """The 1-based frames meta.json lists as absent (target not visible); () when it gives only a count."""
+    frames = meta.get("absent_frames")
+    return tuple(frames) if isinstance(frames, list) else ()
+
+
+def _is_int(v: object) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _check_corpus_meta(meta: dict, path: Path) -> None:
+    """The development corpus's keys (../shared/corpus/README.md), when present: "video" a non-empty string,
+    "window" [first, last] source frames, "absent_frames" a list of 1-based frame numbers."""
+    video = meta.get("video")
+    if video is not None and (not isinstance(video, str) or not video):
+        raise HarnessError(f'{path}: "video" must be a non-empty string, got {video!r}')
+    window = meta.get("window")
+    if window is not None and (not isinstance(window, list) or len(window) != 2
+                               or not all(map(_is_int, window)) or window[0] > window[1]):
+        raise HarnessError(f'{path}: "window" must be [first, last] frame numbers, got {window!r}')
+    absent = meta.get("absent_frames")  # a list of frames; the shared sequences' meta gives a count
+    if absent is not None and not (_is_int(absent) and absent >= 0) and (
+            not isinstance(absent, list) or not all(_is_int(f) and f >= 1 for f in absent)):
+        raise HarnessError(f'{path}: "absent_frames" must be a list of frame numbers from 1 (or a count), '
+                           f'got {absent!r}')
 
 
 def _fps(meta: dict, where: object) -> float:
@@ -169,6 +197,10 @@ def _sequence_frames(path: Path, fps: float, meta: dict) -> Iterator[FrameRecord
     if len(images) != len(gts):
         raise HarnessError(f"{path}: {len(images)} frames (PNG/JPEG) but {len(gts)} boxes in gt.txt")
     occ = _occluded_set(meta)
+    boxed = [f for f in absent_frames(meta) if f <= len(gts) and gts[f - 1] is not None]
+    if boxed:
+        raise HarnessError(f"{path}: meta.json lists frame {boxed[0]} as absent but gt.txt has a box there "
+                           "(an absent frame's line is 0,0,0,0)")
     for k, (img_path, gt) in enumerate(zip(images, gts)):
         flag = (k + 1) in occ if occ is not None else None
         yield FrameRecord(T0_NS + round(k * 1e9 / fps), read_frame(img_path), gt, flag, k)

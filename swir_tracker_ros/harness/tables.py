@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Tables of a `Results`: trackers side by side, per sequence and per group (fold 1, fold 2, synthetic)."""
+"""Tables of a `Results`: trackers side by side, per sequence and per group (the data folders, synthetic
+scenarios, other sources), and over all the data folders together."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
 
+from swir_tracker_ros.harness.devset import OTHER, SYNTHETIC
 from swir_tracker_ros.harness.evaluate import OPE
-from swir_tracker_ros.harness.folds import FOLDS, GROUP_ORDER, SYNTHETIC
 from swir_tracker_ros.harness.protocol import Results
 
 EVAL_FIELDS = ("precision_20", "success_auc", "center_error", "zero_iou", "fps")
@@ -18,6 +19,10 @@ Table = tuple[str, str, list[tuple[str, list[str]]]]
 _MEAN_ROWS = (("OPE mean AUC", "ope_auc", ".3f"), ("OPE mean P@20", "ope_precision_20", ".3f"),
               ("OPE false tracking frames", "ope_false_tracking", "d"),
               ("OPE IoU=0 frames", "ope_zero_iou", "d"),
+              ("OPE false-loss rate (present, said gone)", "ope_false_loss", ".3f"),
+              ("OPE false-tracking rate (IoU<0.1)", "ope_false_tracking_rate", ".3f"),
+              ("OPE absent frames", "ope_absent", "d"),
+              ("OPE gone recall (absent frames)", "ope_gone_recall", ".3f"),
               ("SRE mean AUC", "sre_auc", ".3f"), ("SRE AUC standard error", "sre_se", ".4f"),
               ("SRE mean P@20", "sre_precision_20", ".3f"),
               ("SRE spread (max-min, mean)", "sre_spread", ".3f"),
@@ -33,13 +38,22 @@ def _f(v: float | int | None, fmt: str = ".3f") -> str:
 
 
 def ordered_groups(results: Results) -> list[tuple[str, list[str]]]:
+    """The groups in the order first seen, the synthetic scenarios and other sources last."""
     by = results.by_group()
-    return [(g, by[g]) for g in (*GROUP_ORDER, *sorted(set(by) - set(GROUP_ORDER))) if g in by]
+    last = (SYNTHETIC, OTHER)
+    return [(g, by[g]) for g in (*(g for g in by if g not in last), *last) if g in by]
 
 
 def _ope_cell(results: Results, seq: str, label: str) -> str:
     r = results.ope(seq, label)
     return "-" if r is None else f"{r.success_auc:.3f} / {r.precision_20:.2f} / {r.false_tracking}"
+
+
+def _absence_cell(results: Results, seq: str, label: str) -> str:
+    r = results.ope(seq, label)
+    if r is None:
+        return "-"
+    return f"{_f(r.gone_recall, '.2f')} / {_f(r.false_loss_rate, '.2f')} / {_f(r.false_tracking_rate, '.2f')}"
 
 
 def _sre_cell(results: Results, seq: str, label: str) -> str:
@@ -63,6 +77,11 @@ def protocol_tables(results: Results) -> list[Table]:
                 "-" if "ope_auc" not in m else f"{m['ope_auc']:.3f} / {m['ope_precision_20']:.2f} / "
                 f"{m['ope_false_tracking']}" for m in summ]))
             tables.append((f"OPE {group}: AUC / P@20 / FT", "sequence", rows))
+            rows = [(s, [_absence_cell(results, s, t) for t in tr]) for s in seqs]
+            rows.append((f"mean {group} ({len(seqs)})", [
+                "-" if "ope_auc" not in m else f"{_f(m.get('ope_gone_recall'), '.2f')} / "
+                f"{m['ope_false_loss']:.2f} / {m['ope_false_tracking_rate']:.2f}" for m in summ]))
+            tables.append((f"OPE {group}: gone recall / false loss / false tracking", "sequence", rows))
         if has_sre:
             rows = [(s, [_sre_cell(results, s, t) for t in tr]) for s in seqs]
             rows.append((f"mean {group} ({len(seqs)})", [
@@ -70,11 +89,11 @@ def protocol_tables(results: Results) -> list[Table]:
             tables.append((f"SRE {group}: AUC mean [min, max] over the starts; mean +- standard error",
                            "sequence", rows))
         tables.append((f"MEAN {group} ({len(seqs)})", "", _mean_rows(summ, group == SYNTHETIC)))
-    folds = [seqs for g, seqs in groups if g in FOLDS]
-    if len(folds) == len(FOLDS):
-        both = [s for seqs in folds for s in seqs]
-        tables.append((f"MEAN both folds ({len(both)})", "",
-                       _mean_rows([results.summary(t, both) for t in tr], False)))
+    real = [(g, seqs) for g, seqs in groups if g not in (SYNTHETIC, OTHER)]
+    if len(real) > 1:
+        every = [s for _, seqs in real for s in seqs]
+        tables.append((f"MEAN {' + '.join(g for g, _ in real)} ({len(every)})", "",
+                       _mean_rows([results.summary(t, every) for t in tr], False)))
     return tables
 
 
@@ -95,7 +114,10 @@ def footer(results: Results) -> str:
     made = "; ".join(f"{t}: {', '.join(labels[t].get('codes', []))} (commit "
                      f"{', '.join(labels[t].get('commits', []))})" for t in results.labels if t in labels)
     return (f"SRE style {results.meta.get('style', 'otb')}; FT = frames in state tracking (OpenCV: ok) with "
-            f"IoU 0; frames after the start frame scored; a frame reported as failure keeps its last box.\n"
+            f"IoU 0; frames after the start frame scored; a frame reported as failure keeps its last box. "
+            f"AUC and P@20 over the frames with ground truth; gone recall = absent frames (gt 0,0,0,0) said "
+            f"occluded or lost (mean over the sequences that have some); false loss = present frames said "
+            f"gone; false tracking rate = present frames in state tracking with IoU < 0.1.\n"
             f"made by: {made}")
 
 
