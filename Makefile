@@ -14,8 +14,9 @@ TRAIN   := .venv-train
 MOTV    := .venv-mot
 MSTAMP  := $(MOTV)/.installed
 TSTAMP  := $(TRAIN)/.installed
-MODELS  := $(VENV)/share/swir_tracker_ros/models/nanotrack
-SHARED_MODELS ?= ../shared/models/nanotrack
+MODELS  := $(VENV)/share/swir_tracker_ros/models
+SHARED_MODELS ?= ../shared/models
+WEIGHTS := $(PY) swir_tracker_ros/core/siamese/weights.py --dest $(MODELS) --mirror $(SHARED_MODELS) --python $(VPY)
 PIP_FLAGS ?= --disable-pip-version-check -q
 
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
@@ -23,12 +24,16 @@ export PYTHONDONTWRITEBYTECODE = 1
 
 .PHONY: venv models test test-numerics lint demo demo-sweep bench bench-venv mot-venv train-venv regress train clean
 
-venv: $(STAMP) $(ISTAMP) models
+# The venv does not need the network weights: without them it says what is missing and how to get it, and the
+# network configurations refuse to start (docs/siamese.md); `make models` (and `make test`) require them.
+venv: $(STAMP) $(ISTAMP)
+	$(WEIGHTS) --optional
 
-# The Siamese tracker's pinned weights (swir_tracker_ros/core/siamese/weights.py: upstream commit, sha256),
-# copied from $(SHARED_MODELS) when present, else downloaded at the pinned commit; verified either way.
-models:
-	$(PY) swir_tracker_ros/core/siamese/weights.py --dest $(MODELS) --mirror $(SHARED_MODELS)
+# The networks' pinned weights (swir_tracker_ros/core/siamese/weights.py: upstream commits, sha256), copied
+# from $(SHARED_MODELS) when present, else fetched at the pinned commits (LightTrack-M: its upstream OpenVINO
+# IR converted by the shared converter with the venv's onnx); verified either way.
+models: $(STAMP)
+	$(WEIGHTS)
 
 $(STAMP): requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
 	test -x $(VPY) || $(PY) -m venv $(VENV)

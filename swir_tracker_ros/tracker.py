@@ -13,7 +13,7 @@ from swir_tracker_ros.core import fhog
 from swir_tracker_ros.core.base import Detection
 from swir_tracker_ros.core.conditioning import FrameConditioner
 from swir_tracker_ros.core.features import SmoothedFrame
-from swir_tracker_ros.core.registry import make_filter
+from swir_tracker_ros.core.registry import filter_class, make_filter
 from swir_tracker_ros.core.windows import search_window
 from swir_tracker_ros.errors import KalmanError, TrackerError
 from swir_tracker_ros.policies.fusion import NetworkFusion
@@ -52,6 +52,7 @@ class Tracker:
     def __init__(self, params: TrackerParams | None = None) -> None:
         self.params = params if params is not None else configuration(DEFAULT_CONFIGURATION)
         self.params.validate()
+        filter_class(self.params.base).check_resources(self.params.base)  # ModelError without its weights
         self._conditioner = FrameConditioner(self.params.conditioning)
         self._fusion = NetworkFusion(self.params.fusion) if self.params.fusion is not None else None
         self.reset()

@@ -38,18 +38,38 @@ def sequences_dir(shared_dir: Path) -> Path:
 CROSSING_FRAMES = 30  # otb_crossing frames the Siamese and fusion tests track
 
 
-@pytest.fixture(scope="session")
-def nanotrack_weights() -> None:
-    """Skip (with the reason) when the pinned NanoTrack weights are not installed (`make models`)."""
-    from swir_tracker_ros.core.siamese.locator import locate
+def _weights(versions: tuple[str, ...], what: str) -> None:
+    """Skip, with the ModelError's one line as the reason, unless every file of `versions` is installed."""
+    from swir_tracker_ros.core.siamese.network import require
     from swir_tracker_ros.core.siamese.params import VERSIONS
     from swir_tracker_ros.errors import ModelError
 
     try:
-        for c in VERSIONS.values():
-            locate(c.backbone), locate(c.head)
+        for v in versions:
+            require(VERSIONS[v])
     except ModelError as exc:
-        pytest.skip(f"NanoTrack weights not installed ({exc})")
+        pytest.skip(f"{what} weights not installed ({exc})")
+
+
+@pytest.fixture(scope="session")
+def nanotrack_weights() -> None:
+    """Skip (with the reason) when the pinned NanoTrack weights are not installed (`make models`)."""
+    _weights(("v2", "v3"), "NanoTrack")
+
+
+@pytest.fixture(scope="session")
+def lighttrack_weights() -> None:
+    """Skip (with the reason) when the pinned LightTrack-M weights are not installed (`make models`)."""
+    _weights(("lighttrack",), "LightTrack-M")
+
+
+def skip_without_models(params) -> None:
+    """Skip (with the reason) a test of a configuration that needs network weights that are not installed."""
+    from swir_tracker_ros.nodes.tracker_node_params import missing_models
+
+    reason = missing_models(params)
+    if reason:
+        pytest.skip(f"network weights not installed ({reason})")
 
 
 @pytest.fixture(scope="session")

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """The network beside the filter (policies/fusion.py) and the Siamese base filter (core/siamese/base.py) on
 real frames: which tracker gives the box in each case, the network's own state, the fused configuration in
-the tracker, and the missing-weights error at start-up."""
+the tracker (life without the weights: test_siamese_no_weights.py)."""
 
 from __future__ import annotations
 
@@ -10,16 +10,12 @@ import pytest
 from conftest import CROSSING_FRAMES
 
 from swir_tracker_ros.configs import configuration
-from swir_tracker_ros.core.siamese.locator import ENV_VAR
-from swir_tracker_ros.errors import ModelError
 from swir_tracker_ros.policies.fusion import FusionParams, NetworkFusion, box_iou, mean_box
 from swir_tracker_ros.tracker import Tracker
 from swir_tracker_ros.types import Box, TrackState
 
 N = CROSSING_FRAMES
-
-
-pytestmark = pytest.mark.usefixtures("nanotrack_weights")  # conftest: skip without the weights
+NEEDS_WEIGHTS = pytest.mark.usefixtures("nanotrack_weights")  # conftest: skip without them, with the reason
 
 
 def test_box_iou_and_mean_box() -> None:
@@ -30,6 +26,7 @@ def test_box_iou_and_mean_box() -> None:
     assert (m.cx, m.cy, m.w, m.h) == pytest.approx((17.5, 12.5, 20.0, 20.0))
 
 
+@NEEDS_WEIGHTS
 def test_which_tracker_gives_the_box(crossing_frames) -> None:
     frames, gt = crossing_frames
     fusion = NetworkFusion(FusionParams())
@@ -51,6 +48,7 @@ def test_which_tracker_gives_the_box(crossing_frames) -> None:
     assert who == "network" and box.iou(gt[3]) > 0.5
 
 
+@NEEDS_WEIGHTS
 def test_fused_configuration_tracks_and_differs_from_the_filter_alone(crossing_frames) -> None:
     frames, gt = crossing_frames
     fused, alone = Tracker(configuration("fused")), Tracker(configuration("eco"))
@@ -64,6 +62,7 @@ def test_fused_configuration_tracks_and_differs_from_the_filter_alone(crossing_f
     assert moved == N - 1  # every frame's box is the mean of the two trackers'
 
 
+@NEEDS_WEIGHTS
 def test_siamese_base_filter_tracks_and_measures_its_aspect(crossing_frames) -> None:
     """The network as the base filter of the long-term layers: the box follows the target with the
     network's own width and height (the crossing pedestrian's box is narrower than the start box's
@@ -80,28 +79,3 @@ def test_siamese_base_filter_tracks_and_measures_its_aspect(crossing_frames) -> 
         aspects.append(res.box.w / res.box.h)
     assert np.mean(ious) > 0.6
     assert len(set(np.round(aspects, 6))) > 1  # the size is not the start box's aspect ratio scaled
-
-
-def test_missing_weights_fail_at_start_up(tmp_path, monkeypatch) -> None:
-    monkeypatch.setenv(ENV_VAR, str(tmp_path))
-    with pytest.raises(ModelError, match="make models"):
-        Tracker(configuration("fused"))
-    Tracker(configuration("eco"))  # the correlation-filter configurations need no model
-
-
-def test_the_node_says_what_is_missing_and_how_to_get_it(tmp_path) -> None:
-    """`tracker` in configuration `fused` without the model files: exit 2 with one line naming the file and
-    the fix, no traceback."""
-    import os
-    import subprocess
-
-    from conftest import executable
-
-    env = dict(os.environ, **{ENV_VAR: str(tmp_path)})
-    run = subprocess.run([executable("tracker"), "--ros-args", "-p", "tracker.configuration:=fused"],
-                         env=env, capture_output=True, text=True, timeout=120)
-    out = run.stdout + run.stderr
-    assert run.returncode == 2, out
-    assert "Traceback" not in out
-    line = next(t for t in out.splitlines() if "cannot start" in t)
-    assert "nanotrack_backbone_sim.onnx is missing" in line and "make models" in line, line

@@ -70,6 +70,13 @@ class BaseFilter(ABC):
     def __init__(self, fp: FilterParams, w: float, h: float) -> None:
         """The filter for Params `fp` and a first box of size w x h."""
 
+    @classmethod
+    def check_resources(cls, fp: FilterParams) -> None:
+        """Raise ModelError now if the filter for `fp` needs files that are not installed (a network's
+        weights), so that a configuration on it refuses to start rather than fail on the first target;
+        called when the tracker is built. A correlation filter needs none."""
+        return None
+
     # ------------------------------------------------------------------ model
     @abstractmethod
     def initialise(self, img: np.ndarray, box: Box) -> None:

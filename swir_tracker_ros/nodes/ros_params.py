@@ -129,13 +129,15 @@ def _widen_integer_overrides(node: Node, name: str, kind: type) -> None:
 
 
 def bind_parameters(node: Node, cls: type[P] | P, *, prefix: str = "",
-                    on_change: Callable[[P], None] | None = None) -> P:
+                    on_change: Callable[[P], None] | None = None,
+                    vet: Callable[[P], str | None] | None = None) -> P:
     """Declare every field of the params `cls` (a class: its defaults; an instance: its values) as
     `<prefix><field>`, read and validate the values.
 
     Overrides from `--params-file` / `--ros-args -p` apply at declaration. A wrong type, a value out of
     range or a failing `validate()` raises `ParameterError` naming the parameter and the value. After
-    start-up, a runtime change is rejected with that sentence as the reason; an accepted change calls
+    start-up, a runtime change is rejected with that sentence as the reason, or with `vet(candidate)`'s
+    reason when it gives one (e.g. a network's missing weights); an accepted change calls
     `on_change(new_instance)` after the values are set.
     """
     if not dataclasses.is_dataclass(cls):
@@ -179,10 +181,11 @@ def bind_parameters(node: Node, cls: type[P] | P, *, prefix: str = "",
             candidate = current_values()
             for p in mine:
                 candidate[local[p.name]] = _coerce(kinds[p.name], p.name, p.value)
-            _build(template, candidate, prefix)
+            built = _build(template, candidate, prefix)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
-        return SetParametersResult(successful=True)
+        reason = vet(built) if vet is not None else None
+        return SetParametersResult(successful=not reason, reason=reason or "")
 
     def post_set(params: list[Parameter]) -> None:
         if on_change is not None and any(p.name in fields for p in params):

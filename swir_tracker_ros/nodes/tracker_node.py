@@ -39,6 +39,7 @@ from swir_tracker_ros.nodes.tracker_node_params import (
     TrackerNodeParams,
     fmt_key,
     frame_problem,
+    missing_models,
 )
 from swir_tracker_ros.nodes.tracker_outputs import ACTIVE, IDLE_RESULT, TrackOutputs
 from swir_tracker_ros.nodes.tracker_selection import MIB, Selector
@@ -60,7 +61,7 @@ class TrackerNode(Node):
         # the named configuration first; its own parameters are declared with its values as defaults
         self.choice = bind_parameters(self, ConfigurationChoice, prefix=TRACKER_PREFIX)
         self.tracker_params = bind_parameters(self, self.choice.build(), prefix=TRACKER_PREFIX,
-                                              on_change=self._on_tracker_params)
+                                              on_change=self._on_tracker_params, vet=missing_models)
         cv2.setNumThreads(self.params.threads)
         self.tracker = Tracker(self.tracker_params)  # ModelError (one line, exit 2) without the model files
         with signals_deferred():  # a Ctrl-C inside numba's ctypes callbacks would be swallowed there
@@ -209,12 +210,7 @@ class TrackerNode(Node):
     def _on_tracker_params(self, params: TrackerParams) -> None:
         """New core parameters: a fresh core, re-initialised on the last box at the next frame."""
         self.selector.end(Verdict(Code.SUPERSEDED, "superseded by a change of the tracker parameters"))
-        try:
-            fresh = Tracker(params)
-        except ModelError as exc:
-            self.get_logger().error(f"tracker parameters not applied, the core keeps its own: {exc}")
-            return
-        self.tracker_params, self.tracker = params, fresh
+        self.tracker_params, self.tracker = params, Tracker(params)  # models checked by `missing_models`
         if self.pending_init is None and self.last_box is not None and self.last_result is not None \
                 and self.last_result.state in ACTIVE:
             self.pending_init = self.last_box

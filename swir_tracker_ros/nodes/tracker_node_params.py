@@ -12,10 +12,26 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swir_tracker_ros import topics
-from swir_tracker_ros.errors import ParameterError
+from swir_tracker_ros.core.registry import filter_class
+from swir_tracker_ros.core.siamese.network import require
+from swir_tracker_ros.errors import ModelError, ParameterError
 from swir_tracker_ros.paramfield import param, validate_params
+from swir_tracker_ros.tracker_params import TrackerParams
 
 CLICK_MSGS = ("point", "point_stamped", "off")
+
+
+def missing_models(params: TrackerParams) -> str | None:
+    """Why a configuration cannot run here: the first network weight file it needs (its base filter's, the
+    fusion's network) that is missing or corrupt, as the ModelError's one line; None when it can run. The
+    node refuses a parameter change with this reason and keeps its core (docs/siamese.md)."""
+    try:
+        filter_class(params.base).check_resources(params.base)
+        if params.fusion is not None:
+            require(params.fusion.network.constants, params.fusion.network.model_dir or None)
+    except ModelError as exc:
+        return str(exc)
+    return None
 
 
 @dataclass

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""`SiameseBase`: the Siamese network tracker (core/siamese/tracker.py) as a base filter of the long-term
-tracker.
+"""`SiameseBase`: the Siamese network tracker (core/siamese/tracker.py, any version) as a base filter of the
+long-term tracker.
 
 The policies hand a base filter windows of (1 + `padding`) x the target; the network searches its own
 255 px crop (SiamFC: 255 / 127 x the exemplar's context side, about 4 x a square target) around a window's
@@ -25,6 +25,7 @@ from swir_tracker_ros.core.base import BaseFilter
 from swir_tracker_ros.core.confidence import PSR_FAILURE, apce, psr
 from swir_tracker_ros.core.detection import Detection
 from swir_tracker_ros.core.features import SmoothedFrame
+from swir_tracker_ros.core.siamese.network import require
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseDetection, SiameseTracker
 from swir_tracker_ros.kalman import PAPER000_KCF, BoxModel, ThresholdMap, kcf_box_model
@@ -50,9 +51,15 @@ class SiameseBase(BaseFilter):
         self.net = SiameseTracker(fp)
         # a window's side over the target's: the search crop 255 / 127 x the context side
         # sqrt((w + p)(h + p)), p = context (w + h), for a square target
-        self.padding = fp.instance_size / fp.exemplar_size * (1.0 + 2.0 * fp.context_amount) - 1.0
+        self.padding = self.net.instance_size / self.net.exemplar_size * (1.0 + 2.0 * fp.context_amount) - 1.0
         self._frame: tuple[object, np.ndarray] | None = None  # (the frame it was made of, 8-bit image)
         self._found: list[SiameseDetection] = []
+
+    @classmethod
+    def check_resources(cls, fp: SiameseParams) -> None:
+        """The network's weights, verified now (ModelError naming the file and the fix): a configuration on
+        this filter refuses to start without them instead of failing when a target is picked."""
+        require(fp.constants, fp.model_dir or None)
 
     # ------------------------------------------------------------------ frames
     def _image(self, img: np.ndarray) -> np.ndarray:

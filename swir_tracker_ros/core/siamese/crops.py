@@ -58,6 +58,19 @@ def crop_window(cx: float, cy: float, side: float, out: int) -> CropWindow:
     return CropWindow(int(x0), int(y0), int(sz), int(out))
 
 
+def round_half_away(x: float) -> int:
+    """Python 2's round, half away from zero (LightTrack's `python2round`, which cuts its search crops)."""
+    return int(math.copysign(math.floor(abs(x) + 0.5), x))
+
+
+def lighttrack_window(cx: float, cy: float, side: int, out: int) -> CropWindow:
+    """The window LightTrack's `get_subwindow_tracking` cuts (Yan et al., CVPR 2021, researchmm/LightTrack
+    lib/utils/utils.py): `side` whole pixels, top-left round(pos - (side + 1)/2) with pos = (cx, cy) itself
+    (Python 3 rounding); its centre lies about half a pixel left of and above (cx, cy)."""
+    c = (side + 1) / 2.0
+    return CropWindow(round(cx - c), round(cy - c), int(side), int(out))
+
+
 def cut(image: np.ndarray, win: CropWindow, fill: np.ndarray | float) -> np.ndarray:
     """The window's pixels of `image` (HxW or HxWxC, uint8), `fill` outside the frame (truncated to the
     image type, as the authors' uint8 padding), resampled to out x out (bilinear, cv2.resize)."""

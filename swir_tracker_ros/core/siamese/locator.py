@@ -1,10 +1,11 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Where the pinned NanoTrack weights are at run time, checked once per process against their sha256.
+"""Where the pinned network weights are at run time, checked once per process against their sha256.
 
 Search order: an explicit `model_dir`, else `$SWIR_TRACKER_MODELS`, else `<sys.prefix>/share/swir_tracker_ros/
-models/nanotrack` (what `make models` fills in the venv), else the package's share directory of a colcon
-install (ament_index, when importable). A missing or corrupt file is one `ModelError` naming the file and the
-fix, raised when the tracker starts, never mid-run.
+models` (what `make models` fills in the venv), else the package's share directory of a colcon install
+(ament_index, when importable). A missing or corrupt file is one `ModelError` naming the file, `make models`,
+the variable and the upstream URL, raised when the tracker (or a configuration that needs a network) is
+built, never mid-run.
 """
 
 from __future__ import annotations
@@ -13,11 +14,16 @@ import os
 import sys
 from pathlib import Path
 
-from swir_tracker_ros.core.siamese.weights import SHARE_SUBDIR, pinned, sha256_of
+from swir_tracker_ros.core.siamese.weights import SHARE_SUBDIR, PinnedFile, pinned, sha256_of
 from swir_tracker_ros.errors import ModelError
 
 ENV_VAR = "SWIR_TRACKER_MODELS"
-FIX = f"run `make models`, or set {ENV_VAR} to a directory holding v2/ and v3/ (docs/siamese.md)"
+
+
+def fix(pin: PinnedFile) -> str:
+    """The one fix sentence of a missing or corrupt file: `make models`, the variable, the upstream URL."""
+    return (f"run `make models` (copies ../shared/models or fetches the pinned upstream {pin.source.page}), "
+            f"or set {ENV_VAR} to a directory holding v2/, v3/ and lighttrack/ (docs/siamese.md)")
 
 _verified: dict[Path, str] = {}  # resolved file -> sha256 seen (a file is hashed once per process)
 
@@ -54,7 +60,7 @@ def verify(path: Path, rel: str) -> Path:
     except KeyError:
         raise ModelError(f"{rel} is not a pinned model file (core/siamese/weights.py)") from None
     if not path.is_file():
-        raise ModelError(f"model file {path} is missing: {FIX}")
+        raise ModelError(f"model file {path} is missing: {fix(pin)}")
     key = path.resolve()
     stamp = f"{key.stat().st_size}:{key.stat().st_mtime_ns}"
     if _verified.get(key) == stamp:
@@ -62,7 +68,7 @@ def verify(path: Path, rel: str) -> Path:
     got = sha256_of(path)
     if got != pin.sha256:
         raise ModelError(f"model file {path} is corrupt (sha256 {got[:12]}..., pinned {pin.sha256[:12]}...): "
-                         f"{FIX}")
+                         f"{fix(pin)}")
     _verified[key] = stamp
     return path
 
@@ -75,4 +81,8 @@ def locate(rel: str, model_dir: str | Path | None = None) -> Path:
         if (d / rel).is_file():
             return verify(d / rel, rel)
     looked = ", ".join(str(d) for d in dirs)
-    raise ModelError(f"model file {rel} is missing (looked in {looked}): {FIX}")
+    try:
+        pin = pinned(rel)
+    except KeyError:
+        raise ModelError(f"{rel} is not a pinned model file (core/siamese/weights.py)") from None
+    raise ModelError(f"model file {rel} is missing (looked in {looked}): {fix(pin)}")

@@ -89,6 +89,14 @@ def size_update(w: float, h: float, new_w: float, new_h: float, lr: float) -> tu
     return w * (1.0 - lr) + new_w * lr, h * (1.0 - lr) + new_h * lr
 
 
+def size_update_twice(w: float, h: float, new_w: float, new_h: float, lr: float) -> tuple[float, float]:
+    """LightTrack's size update (researchmm/LightTrack lib/tracker/lighttrack.py `update`): the blend
+    res = lr new + (1 - lr) old, then old (1 - lr) + lr res, i.e. (1 - lr^2) old + lr^2 new: the regressed
+    size enters with weight lr^2."""
+    bw, bh = size_update(w, h, new_w, new_h, lr)
+    return size_update(w, h, bw, bh, lr)
+
+
 def clip_state(cx: float, cy: float, w: float, h: float, width: int, height: int,
                min_size: float) -> tuple[float, float, float, float]:
     """Centre kept in the image, each side in [min_size, image side] (the authors' _bbox_clip)."""

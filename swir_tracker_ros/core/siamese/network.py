@@ -1,58 +1,157 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The NanoTrack network through OpenCV's DNN module: a shared backbone and the depthwise-correlation head.
+"""The Siamese networks in onnxruntime (CPU): a shared backbone and the correlation head, per family.
 
-NanoTrack (HonglinChu/SiamTrackers) follows SiamRPN++'s depthwise cross-correlation (Li et al., CVPR 2019,
-Sec. 3.4) and SiamBAN's anchor-free head (Chen et al., CVPR 2020): the backbone (MobileNetV3) maps the
-127 px exemplar to 8x8 and the 255 px search crop to 16x16 feature maps; the head correlates them and gives
-`output1` (2 x S x S class logits) and `output2` (4 x S x S side distances). The exemplar features are
-computed once per template (`set_exemplar`), the search features on every search. No PyTorch at run time.
+One runtime for every model, chosen by measurement (benchmarks/runtime_speed.py, docs/siamese.md): onnxruntime
+runs NanoTrack's search 2-3x faster than OpenCV's DNN module on one thread, and OpenCV's DNN module returns a
+wrong result for LightTrack-M's backbone. No PyTorch at run time.
+
+- NanoTrack (HonglinChu/SiamTrackers) follows SiamRPN++'s depthwise cross-correlation (Li et al., CVPR 2019,
+  Sec. 3.4) and SiamBAN's anchor-free head (Chen et al., CVPR 2020): the backbone (MobileNetV3) maps the
+  127 px exemplar to 8x8 and the 255 px search crop to 16x16 features; the head gives `output1` (2 x S x S
+  class logits, turned into the foreground probability by a softmax here) and `output2` (4 x S x S side
+  distances).
+  Input: float32 1x3xSxS, BGR 0-255. The published backbone declares a fixed 255 px input; its spatial size is
+  made free when the session is built (the file on disk stays the verified one).
+- LightTrack-Mobile (Yan et al., CVPR 2021): a NAS-found backbone (96 x H/16 x W/16 features) that takes the
+  uint8 1xHxWx3 BGR crop and normalises it itself, a pixel-wise correlation head per search-map size (16 for
+  the 256 px crop, 18 for 288) giving `cls` (S x S, sigmoid applied) and `reg` (4 x S x S side distances).
+
+The exemplar features are computed once per template (`set_exemplar`), the search features on every search.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
+import onnxruntime as ort
 
+from swir_tracker_ros.core.siamese.crops import blob
 from swir_tracker_ros.core.siamese.locator import locate
+from swir_tracker_ros.core.siamese.maps import softmax_score
 from swir_tracker_ros.core.siamese.params import VersionConstants
 from swir_tracker_ros.errors import ModelError, TrackerError
+
+
+def _free_spatial(path: Path) -> bytes:
+    """The model of `path` with the spatial sizes of its inputs and outputs left free (and the stored shapes
+    of its inner tensors dropped), so that one backbone serves the exemplar and the search crop."""
+    import onnx
+
+    model = onnx.load(str(path))
+    for vi in (*model.graph.input, *model.graph.output):
+        dims = vi.type.tensor_type.shape.dim
+        for k, name in ((2, "height"), (3, "width")):
+            if len(dims) == 4:
+                dims[k].dim_param = name
+    del model.graph.value_info[:]
+    return model.SerializeToString()
+
+
+def session(path: Path, threads: int = 1, free_spatial: bool = False) -> ort.InferenceSession:
+    """An onnxruntime CPU session of the model at `path` with `threads` intra-op threads (one inter-op,
+    sequential); ModelError if onnxruntime cannot load it."""
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = threads
+    opts.inter_op_num_threads = 1
+    opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+    opts.log_severity_level = 3  # errors only: no per-run shape warnings on stderr
+    try:
+        model = _free_spatial(path) if free_spatial else str(path)
+        return ort.InferenceSession(model, sess_options=opts, providers=["CPUExecutionProvider"])
+    except Exception as exc:  # onnxruntime's and onnx's own error types: the file is not a usable model
+        raise ModelError(f"model file {path} cannot be loaded by onnxruntime "
+                         f"({str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__})"
+                         ) from None
+
+
+def require(constants: VersionConstants, model_dir: str | Path | None = None) -> list[Path]:
+    """The verified paths of every file the version needs; ModelError naming the first missing one and the
+    fix (for a configuration to check at start-up, before any target)."""
+    return [locate(rel, model_dir) for rel in constants.files]
 
 
 class NanoNet:
     """The backbone and head of one NanoTrack version, loaded from their verified ONNX files."""
 
-    def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None) -> None:
-        self.backbone_path = locate(constants.backbone, model_dir)
-        self.head_path = locate(constants.head, model_dir)
-        try:
-            self._backbone = cv2.dnn.readNetFromONNX(str(self.backbone_path))
-            self._head = cv2.dnn.readNetFromONNX(str(self.head_path))
-        except cv2.error as exc:
-            raise ModelError(f"model file {self.backbone_path} or {self.head_path} cannot be loaded by "
-                             f"cv2.dnn ({str(exc).strip().splitlines()[-1]})") from None
+    def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
+                 threads: int = 1) -> None:
+        self.backbone_path, self.head_path = require(constants, model_dir)
+        self._backbone = session(self.backbone_path, threads, free_spatial=True)
+        self._head = session(self.head_path, threads)
+        self._input = self._backbone.get_inputs()[0].name
         self._z: np.ndarray | None = None
 
-    def features(self, crop_blob: np.ndarray) -> np.ndarray:
-        """Backbone features of a 1x3xSxS crop."""
-        self._backbone.setInput(crop_blob)
-        return self._backbone.forward().copy()
+    def features(self, patch: np.ndarray) -> np.ndarray:
+        """Backbone features of an SxS (x3) uint8 crop."""
+        return self._backbone.run(None, {self._input: blob(patch)})[0]
 
-    def set_exemplar(self, z_blob: np.ndarray) -> None:
+    def set_exemplar(self, patch: np.ndarray) -> None:
         """Compute and keep the exemplar's features (the template)."""
-        self._z = self.features(z_blob)
+        self._z = self.features(patch)
 
     @property
     def has_exemplar(self) -> bool:
         return self._z is not None
 
-    def search(self, x_blob: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(cls 2xSxS, loc 4xSxS) of a search crop against the kept exemplar."""
+    def search(self, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(foreground probability S x S, side distances 4 x S x S) of a search crop against the exemplar."""
         if self._z is None:
             raise TrackerError("the Siamese network has no exemplar yet: call init() first")
-        x = self.features(x_blob)
-        self._head.setInput(self._z, "input1")
-        self._head.setInput(x, "input2")
-        cls, loc = self._head.forward(["output1", "output2"])
-        return cls[0], loc[0]
+        cls, loc = self._head.run(["output1", "output2"], {"input1": self._z, "input2": self.features(patch)})
+        return softmax_score(cls[0]), loc[0]
+
+
+def bgr_batch(patch: np.ndarray) -> np.ndarray:
+    """1xSxSx3 uint8 input of LightTrack-M's backbone: a one-channel crop replicated to three (BGR)."""
+    if patch.ndim == 2:
+        patch = np.repeat(patch[:, :, None], 3, axis=2)
+    return np.ascontiguousarray(patch, dtype=np.uint8)[None]
+
+
+class LightNet:
+    """LightTrack-M's backbone and its two heads (16 x 16 and 18 x 18 search maps), from verified files."""
+
+    def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
+                 threads: int = 1) -> None:
+        paths = require(constants, model_dir)
+        self.backbone_path, self.head_path = paths[0], paths[1]
+        self._backbone = session(paths[0], threads)
+        self._heads = {}
+        for path in paths[1:]:
+            head = session(path, threads)
+            self._heads[int(head.get_inputs()[1].shape[-1])] = head  # xf's side: 16 or 18
+        self._z: np.ndarray | None = None
+
+    def features(self, patch: np.ndarray) -> np.ndarray:
+        """Backbone features (1 x 96 x S/16 x S/16) of an SxS (x3) uint8 crop."""
+        return self._backbone.run(None, {"image": bgr_batch(patch)})[0]
+
+    def set_exemplar(self, patch: np.ndarray) -> None:
+        self._z = self.features(patch)
+
+    @property
+    def has_exemplar(self) -> bool:
+        return self._z is not None
+
+    def search(self, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(sigmoid score S x S, side distances 4 x S x S) of a search crop against the exemplar."""
+        if self._z is None:
+            raise TrackerError("the Siamese network has no exemplar yet: call init() first")
+        x = self.features(patch)
+        head = self._heads.get(int(x.shape[-1]))
+        if head is None:
+            raise TrackerError(f"no LightTrack head for a {x.shape[-1]}x{x.shape[-1]} search map (crop "
+                               f"{patch.shape[0]} px; heads: {sorted(self._heads)})")
+        cls, reg = head.run(["cls", "reg"], {"zf": self._z, "xf": x})
+        return cls.reshape(cls.shape[-2:]).astype(np.float64), reg.reshape(4, *reg.shape[-2:])
+
+
+NETWORKS = {"nanotrack": NanoNet, "lighttrack": LightNet}
+"""The network class of each family (VersionConstants.family)."""
+
+
+def network(constants: VersionConstants, model_dir: str | Path | None = None,
+            threads: int = 1) -> NanoNet | LightNet:
+    """The verified, loaded network of a version (ModelError without its files)."""
+    return NETWORKS[constants.family](constants, model_dir, threads)

@@ -1,15 +1,19 @@
 # SPDX-License-Identifier: Apache-2.0
-"""`SiameseTracker`: NanoTrack's one-shot Siamese tracking (SiamFC / SiamRPN++ / SiamBAN), OpenCV style.
+"""`SiameseTracker`: one-shot Siamese tracking (SiamFC / SiamRPN++ / SiamBAN) with NanoTrack v2 / v3 or
+LightTrack-Mobile (Yan et al., CVPR 2021), each with its authors' procedure, OpenCV style.
 
 `init(frame, box)` cuts the exemplar and keeps its features (the template stays fixed, as the authors
-keep it; `set_exemplar` re-sets it from a box); `update(frame)` searches the 255 px region around the last
-state and returns the box, the best score and the maps; `search(frame, cx, cy, w, h)` is the same search
+keep it; `set_exemplar` re-sets it from a box); `update(frame)` searches the region around the last
+state (NanoTrack 255 px; LightTrack 256 px, or 288 px when the start box covers < 0.4 % of the frame) and
+returns the box, the best score and the maps; `search(frame, cx, cy, w, h)` is the same search
 around any centre and target size (re-detection windows), without touching the state. Per search (SiamRPN
 Sec. 4.3 as NanoTrack's tracker does it): score = softmax foreground probability, per-point boxes from the
 ltrb distances, penalty = exp(-(r_c s_c - 1) k), penalised map = (1 - w_i) penalty * score + w_i cosine,
-best point = its argmax, lr = penalty * score * size_lr, new size = (1 - lr) old + lr regressed, clipped
-to the image. One-channel 8/16-bit frames go through the tracker's frame conditioning to 8 bits and are
-replicated to the three channels of the network.
+best point = its argmax, lr = penalty * score * size_lr, new size = (1 - lr) old + lr regressed (LightTrack
+blends twice: (1 - lr^2) old + lr^2 regressed), clipped to the image. LightTrack's score is the sigmoid
+its head applies, its whole-pixel crops those of its `get_subwindow_tracking` (exemplar side round(s_z)).
+One-channel 8/16-bit frames go through the tracker's frame conditioning to 8 bits and are replicated to the
+three channels of the network.
 """
 
 from __future__ import annotations
@@ -22,11 +26,12 @@ import numpy as np
 from swir_tracker_ros.core.conditioning import FrameConditioner, to_gray
 from swir_tracker_ros.core.siamese.crops import (
     CropWindow,
-    blob,
     context_side,
     crop_window,
     cut,
     cut_subpixel,
+    lighttrack_window,
+    round_half_away,
 )
 from swir_tracker_ros.core.siamese.maps import (
     Boxes,
@@ -36,10 +41,10 @@ from swir_tracker_ros.core.siamese.maps import (
     decode_ltrb,
     point_grid,
     size_update,
-    softmax_score,
+    size_update_twice,
     window_mix,
 )
-from swir_tracker_ros.core.siamese.network import NanoNet
+from swir_tracker_ros.core.siamese.network import network
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.errors import TrackerError
 from swir_tracker_ros.paramfield import validate_params
@@ -96,16 +101,19 @@ class SiameseResult:
 
 
 class SiameseTracker:
-    """NanoTrack v2/v3 tracker (module docstring). Construction raises ParameterError on bad parameters and
-    ModelError when the weights are missing or corrupt; init/update/search raise TrackerError on a bad box
-    or frame."""
+    """NanoTrack v2/v3 or LightTrack-M tracker (module docstring). Construction raises ParameterError on bad
+    parameters and ModelError when the weights are missing or corrupt; init/update/search raise TrackerError
+    on a bad box or frame."""
 
     def __init__(self, params: SiameseParams | None = None) -> None:
         params = SiameseParams() if params is None else params
         validate_params(params)  # ParameterError naming the parameter
         self.params = params
         self.constants = params.constants
-        self.net = NanoNet(self.constants, params.model_dir or None)
+        self.net = network(self.constants, params.model_dir or None, params.threads)
+        self.lighttrack = self.constants.family == "lighttrack"
+        self.exemplar_size = self.constants.exemplar_size
+        self.instance_size = self.constants.instance_size  # LightTrack: chosen with each template
         self._conditioner = FrameConditioner(params.conditioning)
         self._grid: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._fill: np.ndarray | None = None
@@ -134,22 +142,26 @@ class SiameseTracker:
     # --- template ----------------------------------------------------------------------------------------
 
     def set_exemplar(self, frame: np.ndarray, box: Box, bit_depth: int | None = None) -> None:
-        """Cut the exemplar around `box` (127 px, context 0.5, mean padding) and keep its features; the
-        padding colour becomes this frame's mean. The tracking state is not changed."""
+        """Cut the exemplar around `box` (127 / 128 px, context 0.5, mean padding) and keep its features; the
+        padding colour becomes this frame's mean (LightTrack: the search crop's side follows the box's share
+        of the frame). The tracking state is not changed."""
         if not isinstance(box, Box) or not box.is_valid():
             raise TrackerError(f"exemplar box must be finite with positive size, got {box}")
         img = self.prepare(frame, bit_depth)
         self._set_exemplar(img, box)
 
     def _set_exemplar(self, img: np.ndarray, box: Box) -> None:
-        p = self.params
+        p, ex = self.params, self.exemplar_size
         self._fill = np.mean(img, axis=(0, 1))
+        self.instance_size = self.constants.instance_for(box.w * box.h, img.shape[0] * img.shape[1])
         s_z = context_side(box.w, box.h, p.context_amount)
         if p.subpixel_crops:
-            patch = cut_subpixel(img, box.cx, box.cy, s_z, p.exemplar_size, self._fill)
+            patch = cut_subpixel(img, box.cx, box.cy, s_z, ex, self._fill)
+        elif self.lighttrack:  # the template side rounded (Python 3), as the authors' init
+            patch = cut(img, lighttrack_window(box.cx, box.cy, max(1, round(s_z)), ex), self._fill)
         else:
-            patch = cut(img, crop_window(box.cx, box.cy, s_z, p.exemplar_size), self._fill)
-        self.net.set_exemplar(blob(patch))
+            patch = cut(img, crop_window(box.cx, box.cy, s_z, ex), self._fill)
+        self.net.set_exemplar(patch)
 
     def init(self, frame: np.ndarray, box: Box, bit_depth: int | None = None) -> None:
         """Start tracking `box` in `frame`: exemplar features and state (centre, size)."""
@@ -171,8 +183,8 @@ class SiameseTracker:
 
     def search(self, frame: np.ndarray, cx: float, cy: float, w: float, h: float,
                bit_depth: int | None = None) -> SiameseDetection:
-        """Search a 255 px region around (cx, cy) for the template, for a target of size (w, h); the state
-        is not changed (module docstring)."""
+        """Search the region (`instance_size` px) around (cx, cy) for the template, for a target of size
+        (w, h); the state is not changed (module docstring)."""
         return self._search(self.prepare(frame, bit_depth), cx, cy, w, h)
 
     def _search(self, img: np.ndarray, cx: float, cy: float, w: float, h: float) -> SiameseDetection:
@@ -181,17 +193,19 @@ class SiameseTracker:
         if not all(np.isfinite(v) for v in (cx, cy, w, h)) or w <= 0 or h <= 0:
             raise TrackerError(f"search around ({cx}, {cy}) for size {w}x{h}: not a finite positive size")
         t0 = time.perf_counter()
-        p, c = self.params, self.constants
+        p, c, inst = self.params, self.constants, self.instance_size
         s_z = context_side(w, h, p.context_amount)
-        scale = p.exemplar_size / s_z
-        s_x = s_z * p.instance_size / p.exemplar_size
-        win = crop_window(cx, cy, s_x, p.instance_size)
+        scale = self.exemplar_size / s_z
+        s_x = s_z * inst / self.exemplar_size
+        if self.lighttrack:
+            win = lighttrack_window(cx, cy, max(1, round_half_away(s_x)), inst)
+        else:
+            win = crop_window(cx, cy, s_x, inst)
         if p.subpixel_crops:
-            patch = cut_subpixel(img, cx, cy, s_x, p.instance_size, self._fill)
+            patch = cut_subpixel(img, cx, cy, s_x, inst, self._fill)
         else:
             patch = cut(img, win, self._fill)
-        cls, loc = self.net.search(blob(patch))
-        score = softmax_score(cls)
+        score, loc = self.net.search(patch)
         px, py, window = self._maps(score.shape[-1])
         boxes = decode_ltrb(loc, px, py)
         penalty = change_penalty(boxes, w * scale, h * scale, c.penalty_k)
@@ -200,7 +214,7 @@ class SiameseTracker:
         lr = float(penalty[row, col] * score[row, col] * c.size_lr)
         bx, by = cx + boxes.cx[row, col] / scale, cy + boxes.cy[row, col] / scale
         bw, bh = boxes.w[row, col] / scale, boxes.h[row, col] / scale
-        sw, sh = size_update(w, h, bw, bh, lr)
+        sw, sh = (size_update_twice if self.lighttrack else size_update)(w, h, bw, bh, lr)
         H, W = img.shape[:2]
         scx, scy, sw, sh = clip_state(bx, by, sw, sh, W, H, p.min_size)
         return SiameseDetection(

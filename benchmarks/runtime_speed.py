@@ -1,0 +1,156 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Which inference runtime runs the Siamese networks: OpenCV's DNN module or onnxruntime (CPU), per model.
+
+For every model the project ships (NanoTrack v2, v3, LightTrack-M; core/siamese/params.py VERSIONS), on real
+crops (a frame of a shared sequence, the exemplar and the search crop cut as the tracker cuts them), with 1
+and 2 threads: the median milliseconds of one exemplar pass (backbone on the exemplar crop) and of one search
+(backbone on the search crop + head), and the largest difference of each runtime's search outputs from
+onnxruntime's (score map and side distances; "wrong" when the shapes differ, as cv2.dnn's for LightTrack's
+backbone). Prints one table (docs/siamese.md, "One runtime").
+
+    .venv/bin/python benchmarks/runtime_speed.py [--repeats 60] [--threads 1 2] [--sequence otb_crossing]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from swir_tracker_ros.core.siamese.crops import blob, context_side, cut_subpixel
+from swir_tracker_ros.core.siamese.locator import locate
+from swir_tracker_ros.core.siamese.maps import softmax_score
+from swir_tracker_ros.core.siamese.network import bgr_batch, session
+from swir_tracker_ros.core.siamese.params import VERSIONS, VersionConstants
+from swir_tracker_ros.errors import ModelError
+from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
+
+SEQUENCES = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "sequences"
+Pass = Callable[[np.ndarray], np.ndarray]
+
+
+def crops(c: VersionConstants, sequence: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(exemplar, search) uint8 crops: frame 1's box as the exemplar, frame 11 searched around it."""
+    files, gt = frame_files(sequence), read_gt(sequence)
+    b = gt[0]
+    s_z = context_side(b.w, b.h, 0.5)
+    first = read_frame(files[0])
+    fill = np.mean(first, axis=(0, 1))
+    z = cut_subpixel(first, b.cx, b.cy, s_z, c.exemplar_size, fill)
+    x = cut_subpixel(read_frame(files[10]), b.cx, b.cy, s_z * c.instance_size / c.exemplar_size,
+                     c.instance_size, fill)
+    return z, x
+
+
+def onnxruntime_net(c: VersionConstants, threads: int) -> tuple[Pass, Callable]:
+    """(backbone(crop) -> features, search(z_features, crop) -> (score, loc)) in onnxruntime."""
+    nano = c.family == "nanotrack"
+    bb = session(locate(c.backbone), threads, free_spatial=nano)
+    head = session(locate(c.head), threads)
+    name = bb.get_inputs()[0].name
+
+    def backbone(crop: np.ndarray) -> np.ndarray:
+        return bb.run(None, {name: blob(crop) if nano else bgr_batch(crop)})[0]
+
+    def search(z: np.ndarray, crop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        x = backbone(crop)
+        if nano:
+            cls, loc = head.run(None, {"input1": z, "input2": x})
+            return softmax_score(cls[0]), loc[0]
+        cls, reg = head.run(None, {"zf": z, "xf": x})
+        return cls.reshape(cls.shape[-2:]), reg.reshape(4, *reg.shape[-2:])
+    return backbone, search
+
+
+def opencv_net(c: VersionConstants, threads: int) -> tuple[Pass, Callable]:
+    """The same two passes in OpenCV's DNN module (what the project used before issue 45)."""
+    cv2.setNumThreads(threads)
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)  # the wrong backbone's shape log
+    nano = c.family == "nanotrack"
+    bb = cv2.dnn.readNetFromONNX(str(locate(c.backbone)))
+    head = cv2.dnn.readNetFromONNX(str(locate(c.head)))
+
+    def backbone(crop: np.ndarray) -> np.ndarray:
+        bb.setInput(blob(crop) if nano else bgr_batch(crop))
+        return bb.forward().copy()
+
+    def search(z: np.ndarray, crop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        x = backbone(crop)
+        head.setInput(z, "input1" if nano else "zf")
+        head.setInput(x, "input2" if nano else "xf")
+        cls, loc = head.forward(["output1", "output2"] if nano else ["cls", "reg"])
+        if nano:
+            return softmax_score(cls[0]), loc[0]
+        return cls.reshape(cls.shape[-2:]), loc.reshape(4, *loc.shape[-2:])
+    return backbone, search
+
+
+def median_ms(fn: Callable[[], object], repeats: int) -> float:
+    for _ in range(3):  # warm-up
+        fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1000.0 * statistics.median(times)
+
+
+def measure(version: str, runtime: str, threads: int, repeats: int, sequence: Path,
+            reference: dict) -> tuple[str, str, str]:
+    """(exemplar ms, search ms, max |diff| from onnxruntime's outputs) as table cells; a runtime whose
+    backbone gives features of the wrong shape gets its backbone timed alone and "wrong" in the last cell."""
+    c = VERSIONS[version]
+    z_crop, x_crop = crops(c, sequence)
+    backbone, search = (onnxruntime_net if runtime == "onnxruntime" else opencv_net)(c, threads)
+    z, x = backbone(z_crop), backbone(x_crop)
+    ref_z, ref_x = reference.setdefault(version, {}).setdefault("features", (z, x))
+    ex = median_ms(lambda: backbone(z_crop), repeats)
+    if z.shape != ref_z.shape or x.shape != ref_x.shape:
+        bb = median_ms(lambda: backbone(x_crop), repeats)
+        return (f"{ex:.2f}", f"{bb:.2f} (backbone only)",
+                f"wrong: features {'x'.join(map(str, x.shape))} for the {x_crop.shape[0]} px crop "
+                f"(onnxruntime: {'x'.join(map(str, ref_x.shape))})")
+    out = search(z, x_crop)
+    ref = reference[version].setdefault("search", out)
+    diff = max(float(np.abs(a - b).max() / max(1.0, float(np.abs(b).max()))) for a, b in zip(out, ref))
+    se = median_ms(lambda: search(z, x_crop), repeats)
+    return f"{ex:.2f}", f"{se:.2f}", f"{diff:.1e}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=60, help="timed passes per cell (median)")
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--versions", nargs="+", default=list(VERSIONS))
+    ap.add_argument("--sequence", default="otb_crossing", help=f"a sequence folder of {SEQUENCES}")
+    a = ap.parse_args(argv)
+    seq = Path(a.sequence) if Path(a.sequence).is_dir() else SEQUENCES / a.sequence
+    print(f"# {a.repeats} timed passes per cell (median), crops of {seq.name}; load average "
+          f"{os.getloadavg()[0]:.1f}; cv2 {cv2.__version__}, onnxruntime "
+          f"{__import__('onnxruntime').__version__}")
+    print("| model | runtime | threads | exemplar ms | search ms | search outputs vs onnxruntime (max rel.) "
+          "|")
+    print("|---|---|---|---|---|---|")
+    reference: dict = {}
+    try:
+        for version in a.versions:
+            for threads in a.threads:
+                for runtime in ("onnxruntime", "cv2.dnn"):
+                    cells = measure(version, runtime, threads, a.repeats, seq, reference)
+                    print(f"| {version} | {runtime} | {threads} | {' | '.join(cells)} |", flush=True)
+    except ModelError as exc:
+        print(f"runtime_speed: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
