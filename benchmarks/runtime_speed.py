@@ -3,10 +3,12 @@
 
 For every model the project ships (NanoTrack v2, v3, LightTrack-M; core/siamese/params.py VERSIONS), on real
 crops (a frame of a shared sequence, the exemplar and the search crop cut as the tracker cuts them), with 1
-and 2 threads: the median milliseconds of one exemplar pass (backbone on the exemplar crop) and of one search
+and 2 threads, the two runtimes timed in turn within each repeat (the same load for both on a shared
+machine): the median milliseconds of one exemplar pass (backbone on the exemplar crop) and of one search
 (backbone on the search crop + head), and the largest difference of each runtime's search outputs from
-onnxruntime's (score map and side distances; "wrong" when the shapes differ, as cv2.dnn's for LightTrack's
-backbone). Prints one table (docs/siamese.md, "One runtime").
+onnxruntime's (score map and side distances, relative to the output's largest value when above 1; "wrong"
+when the backbone's features have another shape, as cv2.dnn's for LightTrack-M's). Prints one table
+(docs/siamese.md, "One runtime").
 
     .venv/bin/python benchmarks/runtime_speed.py [--repeats 60] [--threads 1 2] [--sequence otb_crossing]
 """
@@ -92,37 +94,50 @@ def opencv_net(c: VersionConstants, threads: int) -> tuple[Pass, Callable]:
     return backbone, search
 
 
-def median_ms(fn: Callable[[], object], repeats: int) -> float:
-    for _ in range(3):  # warm-up
-        fn()
-    times = []
+def interleaved_ms(fns: list[Callable[[], object]], repeats: int) -> list[float]:
+    """Median milliseconds of each of `fns`, timed in turn within every repeat (both runtimes see the same
+    load on a shared machine), after 3 warm-up rounds."""
+    for _ in range(3):
+        for fn in fns:
+            fn()
+    times: list[list[float]] = [[] for _ in fns]
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1000.0 * statistics.median(times)
+        for fn, t in zip(fns, times):
+            t0 = time.perf_counter()
+            fn()
+            t.append(time.perf_counter() - t0)
+    return [1000.0 * statistics.median(t) for t in times]
 
 
-def measure(version: str, runtime: str, threads: int, repeats: int, sequence: Path,
-            reference: dict) -> tuple[str, str, str]:
-    """(exemplar ms, search ms, max |diff| from onnxruntime's outputs) as table cells; a runtime whose
-    backbone gives features of the wrong shape gets its backbone timed alone and "wrong" in the last cell."""
+def measure(version: str, threads: int, repeats: int, sequence: Path) -> dict[str, tuple[str, str, str]]:
+    """Per runtime: (exemplar ms, search ms, max |diff| from onnxruntime's outputs) as table cells. A runtime
+    whose backbone gives features of the wrong shape gets its backbone timed alone and "wrong" in the last
+    cell."""
     c = VERSIONS[version]
     z_crop, x_crop = crops(c, sequence)
-    backbone, search = (onnxruntime_net if runtime == "onnxruntime" else opencv_net)(c, threads)
-    z, x = backbone(z_crop), backbone(x_crop)
-    ref_z, ref_x = reference.setdefault(version, {}).setdefault("features", (z, x))
-    ex = median_ms(lambda: backbone(z_crop), repeats)
-    if z.shape != ref_z.shape or x.shape != ref_x.shape:
-        bb = median_ms(lambda: backbone(x_crop), repeats)
-        return (f"{ex:.2f}", f"{bb:.2f} (backbone only)",
-                f"wrong: features {'x'.join(map(str, x.shape))} for the {x_crop.shape[0]} px crop "
-                f"(onnxruntime: {'x'.join(map(str, ref_x.shape))})")
-    out = search(z, x_crop)
-    ref = reference[version].setdefault("search", out)
-    diff = max(float(np.abs(a - b).max() / max(1.0, float(np.abs(b).max()))) for a, b in zip(out, ref))
-    se = median_ms(lambda: search(z, x_crop), repeats)
-    return f"{ex:.2f}", f"{se:.2f}", f"{diff:.1e}"
+    nets = {"onnxruntime": onnxruntime_net(c, threads), "cv2.dnn": opencv_net(c, threads)}
+    ref_b, ref_s = nets["onnxruntime"]
+    ref_z, ref_x = ref_b(z_crop), ref_b(x_crop)
+    ref_out = ref_s(ref_z, x_crop)
+    exemplar, search, diffs = [], [], {}
+    for name, (backbone, run) in nets.items():
+        z, x = backbone(z_crop), backbone(x_crop)
+        exemplar.append(lambda backbone=backbone: backbone(z_crop))
+        if z.shape != ref_z.shape or x.shape != ref_x.shape:
+            search.append(lambda backbone=backbone: backbone(x_crop))
+            diffs[name] = (f"wrong: features {'x'.join(map(str, x.shape))} for the {x_crop.shape[0]} px crop "
+                           f"(onnxruntime: {'x'.join(map(str, ref_x.shape))})")
+            continue
+        out = run(z, x_crop)
+        rel = max(float(np.abs(a - b).max() / max(1.0, float(np.abs(b).max()))) for a, b in zip(out, ref_out))
+        diffs[name] = f"{rel:.1e}"
+        search.append(lambda run=run, z=z: run(z, x_crop))
+    ex_ms, se_ms = interleaved_ms(exemplar, repeats), interleaved_ms(search, repeats)
+    out = {}
+    for k, name in enumerate(nets):
+        only = " (backbone only)" if diffs[name].startswith("wrong") else ""
+        out[name] = (f"{ex_ms[k]:.2f}", f"{se_ms[k]:.2f}{only}", diffs[name])
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -139,12 +154,10 @@ def main(argv: list[str] | None = None) -> int:
     print("| model | runtime | threads | exemplar ms | search ms | search outputs vs onnxruntime (max rel.) "
           "|")
     print("|---|---|---|---|---|---|")
-    reference: dict = {}
     try:
         for version in a.versions:
             for threads in a.threads:
-                for runtime in ("onnxruntime", "cv2.dnn"):
-                    cells = measure(version, runtime, threads, a.repeats, seq, reference)
+                for runtime, cells in measure(version, threads, a.repeats, seq).items():
                     print(f"| {version} | {runtime} | {threads} | {' | '.join(cells)} |", flush=True)
     except ModelError as exc:
         print(f"runtime_speed: error: {exc}", file=sys.stderr)
