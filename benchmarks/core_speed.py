@@ -473,6 +473,21 @@ def time_opencv(frames8: np.ndarray, box: tuple[float, ...]) -> dict:
 SIAMESE_SEQUENCE = REPO.parent / "shared" / "data" / "sequences" / "antiuav_irclip04"  # 640x512 thermal IR
 
 
+class AlwaysGone:
+    """A gone verdict rejecting every search and candidate: configuration `network` in re-detection mode."""
+
+    def __init__(self) -> None:
+        from swir_tracker_ros.policies.gone import GoneParams
+
+        self.p = GoneParams()
+
+    def judge_cues(self, cues: object) -> bool:
+        return True
+
+    def resume_bar(self) -> float:
+        return float("inf")
+
+
 def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
     """Our Siamese tracker (core/siamese, v2 and v3) and OpenCV's `cv2.TrackerNano` (the v2 ONNX pair from
     the same model directory) on the same first `n` real frames of `seq` (8-bit gray; TrackerNano gets them
@@ -507,6 +522,14 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
     fused = Tracker(configuration("fused"))
     fused.init(frames[0], box)
     out["fused"] = timed(fused.update, frames[1:])
+    # configuration `network` (policies/lead.py): tracking, and re-detection mode (a verdict that rejects
+    # every frame: the last box's crop and the lattice's next ones on every frame)
+    for key, redetect in (("network", False), ("network_redetect", True)):
+        trk = Tracker(configuration("network"))
+        trk.init(frames[0], box)
+        if redetect:
+            trk._track.lead.verdict = AlwaysGone()
+        out[key] = timed(trk.update, frames[1:])
     p = cv2.TrackerNano_Params()
     p.backbone, p.neckhead = str(locate(VERSIONS["v2"].backbone)), str(locate(VERSIONS["v2"].head))
     nano = cv2.TrackerNano_create(p)
@@ -519,17 +542,22 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
 SIAMESE_NAMES = {"siamese_v2": "ours Siamese v2 (core/siamese)",
                  "siamese_v3": "ours Siamese v3 (core/siamese)",
                  "fused": "ours, configuration fused (ECO + v2)",
+                 "network": "ours, configuration network (tracking)",
+                 "network_redetect": "ours, configuration network (re-detection)",
                  "opencv_nano": "OpenCV TrackerNano (v2 weights)"}
 
 
 def print_siamese(res: dict, frames: int) -> None:
-    print(f"\nSiamese trackers on {SIAMESE_SEQUENCE.name}, first {frames} real frames, one thread")
+    from swir_tracker_ros.harness.sources import frame_files, read_frame
+
+    h, w = read_frame(frame_files(SIAMESE_SEQUENCE)[0]).shape[:2]
+    print(f"\nSiamese trackers on {SIAMESE_SEQUENCE.name} ({w}x{h}), first {frames} real frames, one thread")
     print("tracker" + " " * 42 + "fps  cpu fps   p50 ms   p95 ms   max ms")
     for key, label in SIAMESE_NAMES.items():
         r = res[key]
         print(f"  {label:46s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} {r['p95_ms']:8.2f} "
               f"{r['max_ms']:8.2f}")
-    for key in ("siamese_v2", "siamese_v3", "fused"):
+    for key in ("siamese_v2", "siamese_v3", "fused", "network", "network_redetect"):
         print(f"  ratio {key} / TrackerNano: {res[key]['fps'] / res['opencv_nano']['fps']:.2f} "
               f"(cpu {res[key]['cpu_fps'] / res['opencv_nano']['cpu_fps']:.2f})")
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from swir_tracker_ros.core.base import BaseFilter, Detection
 from swir_tracker_ros.policies.coast import CoastModel
+from swir_tracker_ros.policies.lead import NetworkLead
 from swir_tracker_ros.policies.lookalike import LookalikeGuard, Takeback
 from swir_tracker_ros.policies.memory import AppearanceMemory
 from swir_tracker_ros.policies.motion import MotionFilter
@@ -45,6 +46,7 @@ class Track:
         self.lookalike = LookalikeGuard(p.lookalike, self.trail) if p.lookalike is not None else None
         self.sweep = LongLossSweep(p.sweep, p.redetection) if p.sweep is not None else None
         self.rejected = RejectedFrames(p.rejected) if p.rejected is not None else None
+        self.lead = NetworkLead(p.lead, base.net) if p.lead is not None else None  # type: ignore[attr-defined]
 
     def clamp_size(self, box: Box) -> Box:
         """Keep the size within [1/4, 4] x the initial size so one bad scale step cannot run away."""

@@ -97,8 +97,11 @@ class Tracker:
         self._sigma = p.presmooth * math.sqrt(b.w * b.h)
         img = self._smoothed(img)
         base = make_filter(p.base, b.w, b.h)  # the configuration's base filter, selected once
-        base.initialise(img, b)
+        if p.lead is None:
+            base.initialise(img, b)
         self._track = Track(p, base, b, frame.shape)
+        if self._track.lead is not None:  # the network leads from the raw frame (policies/lead.py)
+            self._track.lead.start(frame, box, bit_depth)
         if self._fusion is not None:
             self._fusion.start(frame, box, bit_depth)
         self._state = TrackState.TRACKING
@@ -118,22 +121,26 @@ class Tracker:
         t = self._track
         if self._state is TrackState.IDLE or t is None:
             return TrackResult(box=Box(0.0, 0.0, 0.0, 0.0), state=TrackState.IDLE)
-        if self._state is TrackState.LOST:
+        if self._state is TrackState.LOST and t.lead is None:
             return self._result(t.box, TrackState.LOST)
         try:
             if not isinstance(frame, np.ndarray) or frame.shape[:2] != t.frame_shape[:2]:
                 raise TrackerError("frame size differs from the init frame")
             if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
                 raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
-            img = self._smoothed(self._conditioner(frame, bit_depth))
             dx, dy = (float(v) for v in ego_shift)
             if not (math.isfinite(dx) and math.isfinite(dy)):
                 dx = dy = 0.0
             frames = float(frames)
             if not (math.isfinite(frames) and frames > 0.0):
                 frames = 1.0
+            if t.lead is not None:  # the network leads (policies/lead.py); a bad frame keeps its track
+                res = t.lead.step(frame, bit_depth, (dx, dy))
+                self._state = res.state
+                return res
+            img = self._smoothed(self._conditioner(frame, bit_depth))
         except (*_RECOVERABLE, TypeError):
-            return self._result(t.box, TrackState.LOST)  # transient: the track itself is kept
+            return self._result(t.lead.box if t.lead else t.box, TrackState.LOST)  # transient: track kept
         try:
             if t.motion is None:
                 return self._step_cf(t, img)

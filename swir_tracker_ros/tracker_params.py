@@ -18,6 +18,7 @@ from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import nested, param, validate_params
 from swir_tracker_ros.policies.coast import CoastParams
 from swir_tracker_ros.policies.fusion import FusionParams
+from swir_tracker_ros.policies.lead import LeadParams
 from swir_tracker_ros.policies.lookalike import LookalikeParams
 from swir_tracker_ros.policies.memory import MemoryParams
 from swir_tracker_ros.policies.motion import MotionParams
@@ -59,6 +60,9 @@ class TrackerParams:
     fusion: FusionParams | None = nested(
         lambda: None, "a Siamese network tracking beside the base filter, one box from both "
         "(policies/fusion.py); none: the base filter alone")
+    lead: LeadParams | None = nested(
+        lambda: None, "(ours) the Siamese network base filter leads with its own state, its failure verdict "
+        "and a widening re-detection (policies/lead.py); none: the base filter inside the Kalman layers")
     conditioning: ConditioningConfig = nested(
         ConditioningConfig, "frame conditioning before any window is sampled (core/conditioning.py)")
     trail_frames: int = param(
@@ -98,6 +102,13 @@ class TrackerParams:
                 raise ParameterError(f"parameters {', '.join(idle)}: the look-alike guard and the long-loss "
                                      f"sweep do not wrap base filter {base.name} (window_policies); set "
                                      "them to None")
+        if self.lead is not None:
+            if base.name != "siamese" or self.motion is not None or self.fusion is not None:
+                raise ParameterError("parameter lead: only the Siamese network base filter leads, without "
+                                     "the motion filter and the fusion (set them to None)")
+            if self.conditioning.downscale != 1.0:
+                raise ParameterError("parameter lead: the network takes the input frame (conditioning."
+                                     "downscale must be 1)")
         if self.sweep is not None and self.redetection.lattice_step <= 0.0:
             raise ParameterError("parameter sweep: the long-loss sweep searches the re-detection lattice, "
                                  "off with redetection.lattice_step 0; set sweep to None")
