@@ -8,7 +8,9 @@ machine): the median milliseconds of one exemplar pass (backbone on the exemplar
 (backbone on the search crop + head), and the largest difference of each runtime's search outputs from
 onnxruntime's (score map and side distances, relative to the output's largest value when above 1; "wrong"
 when the backbone's features have another shape, as cv2.dnn's for LightTrack-M's). Prints one table
-(docs/siamese.md, "One runtime").
+(docs/siamese.md, "One runtime"); then each version's whole tracker (`SiameseTracker`, onnxruntime, one
+thread) stepped in turn on the same frames (--tracker-frames of --tracker-sequence; otb_walking2, as the
+LightTrack reference's speed figure).
 
     .venv/bin/python benchmarks/runtime_speed.py [--repeats 60] [--threads 1 2] [--sequence otb_crossing]
 """
@@ -140,12 +142,42 @@ def measure(version: str, threads: int, repeats: int, sequence: Path) -> dict[st
     return out
 
 
+def tracker_speed(versions: list[str], sequence: Path, frames: int) -> None:
+    """Whole-tracker speed (crops, network, decoding) of each version, the trackers stepped in turn on the
+    same frames (the same load for all): median and mean ms per frame, one onnxruntime thread."""
+    from swir_tracker_ros.core.siamese.params import SiameseParams
+    from swir_tracker_ros.core.siamese.tracker import SiameseTracker
+
+    files, gt = frame_files(sequence), read_gt(sequence)
+    images = [read_frame(f) for f in files[:frames]]
+    trackers = {v: SiameseTracker(SiameseParams(version=v)) for v in versions}
+    times: dict[str, list[float]] = {v: [] for v in versions}
+    for trk in trackers.values():
+        trk.init(images[0], gt[0])
+    for img in images[1:]:
+        for v, trk in trackers.items():
+            t0 = time.perf_counter()
+            trk.update(img)
+            times[v].append(time.perf_counter() - t0)
+    print(f"\n# whole tracker, {len(images) - 1} frames of {sequence.name} ({images[0].shape[1]}x"
+          f"{images[0].shape[0]}), trackers in turn; load average {os.getloadavg()[0]:.1f}")
+    print("| version | search crop | median ms / frame | mean ms / frame | frames / s (median) |")
+    print("|---|---|---|---|---|")
+    for v, t in times.items():
+        med = 1000.0 * statistics.median(t)
+        print(f"| {v} | {trackers[v].instance_size} | {med:.1f} | {1000.0 * statistics.mean(t):.1f} | "
+              f"{1000.0 / med:.0f} |")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=60, help="timed passes per cell (median)")
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--versions", nargs="+", default=list(VERSIONS))
     ap.add_argument("--sequence", default="otb_crossing", help=f"a sequence folder of {SEQUENCES}")
+    ap.add_argument("--tracker-frames", type=int, default=150,
+                    help="frames of the whole-tracker comparison (0: none)")
+    ap.add_argument("--tracker-sequence", default="otb_walking2", help="its sequence")
     a = ap.parse_args(argv)
     seq = Path(a.sequence) if Path(a.sequence).is_dir() else SEQUENCES / a.sequence
     print(f"# {a.repeats} timed passes per cell (median), crops of {seq.name}; load average "
@@ -159,6 +191,9 @@ def main(argv: list[str] | None = None) -> int:
             for threads in a.threads:
                 for runtime, cells in measure(version, threads, a.repeats, seq).items():
                     print(f"| {version} | {runtime} | {threads} | {' | '.join(cells)} |", flush=True)
+        if a.tracker_frames:
+            ts = Path(a.tracker_sequence)
+            tracker_speed(a.versions, ts if ts.is_dir() else SEQUENCES / ts, a.tracker_frames)
     except ModelError as exc:
         print(f"runtime_speed: error: {exc}", file=sys.stderr)
         return 2
