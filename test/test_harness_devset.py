@@ -144,6 +144,9 @@ def test_a_corpus_layout_is_read_end_to_end(corpus, tmp_path, capsys, monkeypatc
     assert cli.main(["eval", DEV, "--tracker", "cf", *common]) == 0
     assert cli.main(["eval", DEV, "--tracker", "cf", "--set", "scale.penalty=0.9", "--label", "cf2",
                      *common]) == 0
+    prov = json.loads((results / "runs" / "cf2" / "a_w2" / "ope.json").read_text())["provenance"]
+    assert prov["commit"] and prov["overrides"] == ["scale.penalty=0.9"]  # the store records commit and
+    assert prov["parameters"]["scale"]["penalty"] == 0.9  # the parameters of every run
     js = tmp_path / "t.json"
     assert cli.main(["table", "cf", "cf2", "--protocol", "ope", "--json", str(js), *common]) == 0
     data = json.loads(js.read_text())

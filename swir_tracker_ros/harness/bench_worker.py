@@ -36,12 +36,12 @@ def _nano(models: dict[str, str]) -> object:
     return cv2.TrackerNano_create(params)
 
 
-FACTORIES = {  # tracker name -> constructor taking the model files (only Nano uses them)
-    "KCF": lambda models: cv2.TrackerKCF_create(),
-    "CSRT": lambda models: cv2.TrackerCSRT_create(),
-    "MOSSE": lambda models: cv2.legacy.TrackerMOSSE_create(),
-    "Nano": _nano,
+FACTORIES = {
+    "KCF": lambda: cv2.TrackerKCF_create(),
+    "CSRT": lambda: cv2.TrackerCSRT_create(),
+    "MOSSE": lambda: cv2.legacy.TrackerMOSSE_create(),
 }
+MODEL_FACTORIES = {"Nano": _nano}  # trackers built from model files (tracker name -> constructor(models))
 WORKER_VERSION = 3  # part of the peer-cache key: bump when a change here changes the boxes
 
 
@@ -84,7 +84,7 @@ def run(spec: str, name: str, max_frames: int | None, perturbations: list[str] |
             h, w = img.shape[:2]
             for p, r in runs.items():
                 box = init if init is not None else sre_box(fr.gt, p, w, h, style)
-                trk = FACTORIES[name](models or {})
+                trk = MODEL_FACTORIES[name](models or {}) if name in MODEL_FACTORIES else FACTORIES[name]()
                 t0 = time.perf_counter()
                 trk.init(img, cv_rect(box))
                 r["seconds"] += time.perf_counter() - t0
@@ -111,7 +111,7 @@ def run(spec: str, name: str, max_frames: int | None, perturbations: list[str] |
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("source")
-    ap.add_argument("--tracker", choices=sorted(FACTORIES), required=True)
+    ap.add_argument("--tracker", choices=sorted((*FACTORIES, *MODEL_FACTORIES)), required=True)
     ap.add_argument("--frames", type=int, default=None)
     ap.add_argument("--perturb", nargs="+", default=None, choices=("none", *SRE_PERTURBATIONS),
                     help="starts to run side by side (none = the ground-truth box; default: none)")

@@ -121,7 +121,7 @@ def _stored_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--results", default=None,
                    help="results directory of the stored runs (default: $SWIR_RESULTS or "
                         f"{commands.DEFAULT_RESULTS})")
-    p.add_argument("--data", nargs="+", action="extend", default=None, metavar="DIR",
+    p.add_argument("--data", dest="data_folders", nargs="+", action="extend", default=None, metavar="DIR",
                    help=f"data folders (folders of sequence folders; repeatable): the groups of the tables, "
                         f"the videos of the verdict, the sequences of SRC `{DEV}`; `{DEV}` or nothing: the "
                         f"development set, {DEFAULT_SEQUENCES} and the built corpus (${CORPUS_ENV}, else "

@@ -57,7 +57,7 @@ def sources(a: argparse.Namespace) -> list[Source]:
             out += [open_source(SYNTH_PREFIX + n, a.frames) for n in scenarios()]
             continue
         if spec == DEV:
-            out += [open_source(f, a.frames) for f in sequence_folders(data_dirs(a.data)).values()]
+            out += [open_source(f, a.frames) for f in sequence_folders(data_dirs(a.data_folders)).values()]
             continue
         p = Path(spec)
         if p.is_dir() and not (p / "gt.txt").exists() and not (p / "metadata.yaml").exists() \
@@ -93,7 +93,7 @@ def _play_and_load(a: argparse.Namespace, ours: list[Player], peers: list[str], 
     everyone = ours + [Player.opencv(t) for t in peers]
     play(srcs, everyone, starts, style, store, a.jobs, a.rerun, progress(a))
     labels = [p.label for p in everyone] + list(getattr(a, "peers", None) or [])
-    return load_results(store, labels, [s.key for s in srcs], starts, style, data_dirs(a.data),
+    return load_results(store, labels, [s.key for s in srcs], starts, style, data_dirs(a.data_folders),
                         Path(a.peer_dir))
 
 
@@ -156,7 +156,7 @@ def _stored(a: argparse.Namespace, labels: list[str], starts: tuple[str, ...],
             keys: list[str] | None = None) -> Results:
     if keys is None and a.bags:
         keys = [s.key for s in sources(a)]
-    return load_results(results_dir(a), labels, keys, starts, a.sre_style, data_dirs(a.data),
+    return load_results(results_dir(a), labels, keys, starts, a.sre_style, data_dirs(a.data_folders),
                         Path(a.peer_dir), a.allow_mixed)
 
 
@@ -178,10 +178,10 @@ def cmd_verdict(a: argparse.Namespace) -> int:
     keys = None
     if not a.bags:  # the data folders' sequences stored for either (the others are no pair)
         stored = set(store.sequences(base)) | set(store.sequences(cand))
-        keys = [k for k in sequence_folders(data_dirs(a.data)) if k in stored]
+        keys = [k for k in sequence_folders(data_dirs(a.data_folders)) if k in stored]
         if not keys:
             raise HarnessError(f"no stored run of {base} or {cand} in {store.root} on the sequences of "
-                               f"{', '.join(str(d) for d in data_dirs(a.data))}")
+                               f"{', '.join(str(d) for d in data_dirs(a.data_folders))}")
     results = _stored(a, [base, cand], (OPE, *SRE_PERTURBATIONS), keys)
     verdict = paired_verdict(results, base, cand, a.metric, keys or list(results.stats))
     print(format_verdict(verdict))

@@ -10,11 +10,13 @@ to keep both, store the new runs under another label or results directory).
 from __future__ import annotations
 
 import hashlib
+import json
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from datetime import datetime, timezone
+from functools import lru_cache
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -24,6 +26,7 @@ from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
 from swir_tracker_ros.errors import HarnessError, ModelError
 from swir_tracker_ros.harness.compare import (
+    NANO_VERSION,
     bench_python,
     nano_models,
     opencv_code,
@@ -36,6 +39,7 @@ from swir_tracker_ros.harness.evaluate import (
     make_tracker_factory,
     resolve_configuration,
     run_starts,
+    tracker_params,
 )
 from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS, SRE_STYLES
 from swir_tracker_ros.harness.sources import Source, frame_files, read_frame, source_fingerprint
@@ -112,11 +116,34 @@ class Player:
     def code(self) -> str:
         return opencv_code(bench_python(), self.configuration) if self.tracker == "opencv" else code_hash()
 
+    def parameters(self) -> dict:
+        """The parameters the player runs with, as JSON: information in the provenance (the configuration,
+        its overrides and the code decide them)."""
+        return _parameters(self.tracker, self.configuration, self.overrides)
+
     def provenance(self, src: Source, style: str | None) -> dict:
         return {"tracker": self.tracker, "configuration": self.configuration,
                 "overrides": list(self.overrides),
                 "code": self.code(), "numerics": numerics(), "fingerprint": source_fingerprint(src),
-                "style": style, "commit": git_commit(), "frames": src.max_frames}
+                "style": style, "commit": git_commit(), "frames": src.max_frames,
+                "parameters": self.parameters()}
+
+
+def siamese_params(configuration: str) -> SiameseParams:
+    """The Siamese tracker's parameters of a network player's configuration (`v2`, `v2-wholepixel`)."""
+    version, _, mode = configuration.partition("-")
+    return SiameseParams(version=version, subpixel_crops=mode != WHOLE_PIXEL[1:])
+
+
+@lru_cache(maxsize=32)
+def _parameters(tracker: str, configuration: str, overrides: tuple[str, ...]) -> dict:
+    if tracker == "swir":
+        params: object = tracker_params(configuration, overrides)
+    elif tracker == "network":
+        params = siamese_params(configuration)
+    else:
+        return {"opencv": configuration, **({"nanotrack": NANO_VERSION} if configuration == "Nano" else {})}
+    return json.loads(json.dumps(asdict(params), default=str))
 
 
 def _style_of(start: str, style: str) -> str | None:
@@ -180,8 +207,7 @@ def execute(task: Task) -> TaskReport:
     if p.tracker == "swir":
         runs = run_starts(src, make_tracker_factory(p.configuration, p.overrides), task.starts, task.style)
     elif p.tracker == "network":
-        version, _, mode = p.configuration.partition("-")
-        params = SiameseParams(version=version, subpixel_crops=mode != WHOLE_PIXEL[1:])
+        params = siamese_params(p.configuration)
         runs = run_starts(src, lambda: SiameseTracker(params), task.starts, task.style)
     else:
         runs = run_worker(src, p.configuration, bench_python(), task.starts, task.style)
