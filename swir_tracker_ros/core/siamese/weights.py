@@ -287,8 +287,8 @@ def main(argv: list[str] | None = None) -> int:
                             Converter(script, a.python))
     except FetchError as exc:
         if a.optional:
-            print(f"models: not installed: {exc}. The network configurations (siamese, fused) will refuse to "
-                  f"start; the correlation-filter ones work.", file=sys.stderr)
+            print(f"models: not installed: {exc}. The configurations that need a network (siamese, fused, "
+                  f"...) will refuse to start; the correlation-filter ones work.", file=sys.stderr)
             return 0
         print(f"models: error: {exc}", file=sys.stderr)
         return 1
