@@ -37,16 +37,12 @@ def _as_box(box: object) -> Box:
 
 
 class Tracker:
-    """Single-object tracker; `init(frame, box)` then `update(frame)` once per frame.
+    """Single-object tracker; `init(frame, box)` then `update(frame)` once per frame (docs/tracking_core.md).
 
-    Per frame (paper 000 Fig. 2, dissertation §1.7 pseudo-code): Kalman prediction (+ ego shift), scale
-    search at the prediction, failure detection (PSR < 7 for KCF, APCE <= 0.6 mean for DCF-CA),
-    re-detection around the prediction on failure, robust Kalman update with a peak-adaptive Huber
-    threshold (the motion held while re-detecting), and a model update only on confident frames. Each
-    long-term mechanism is a policy (swir_tracker_ros/policies/); which ones, with which values, is a
-    named configuration (swir_tracker_ros/configs/: the papers' `cf`, `kalman`, `robust`,
-    `robust_adaptive`, `robust_adaptive_r`, and our default `measured`; docs/tracking_core.md). A
-    configuration without a motion filter (`cf`) is the bare correlation filter.
+    A configuration (configs/) names the base filter and the policies (policies/) around it: the papers'
+    loop (paper 000 Fig. 2, dissertation §1.7: Kalman prediction, scale search, PSR / APCE failure test,
+    re-detection around the prediction, robust Kalman update, gated model update; `_step`), the bare
+    correlation filter (`cf`, `_step_cf`), or the Siamese network leading with its own state (`lead`).
     """
 
     def __init__(self, params: TrackerParams | None = None) -> None:
@@ -330,17 +326,8 @@ class Tracker:
         if t is not None and t.motion is not None:
             vx, vy = (v * inv for v in t.motion.velocity())
             velocity = (vx, vy) if math.isfinite(vx) and math.isfinite(vy) else velocity
-        return TrackResult(
-            box=up(box),
-            state=state,
-            peak=det.peak if det else 0.0,
-            psr=det.psr if det else 0.0,
-            apce=det.apce if det else 0.0,
-            huber_threshold=float(threshold),
-            search_mode=mode,
-            measured=measured,
-            scale=scale,
-            model_updated=updated,
-            search_windows=tuple(up(b) for b in windows),
-            velocity=velocity,
-        )
+        return TrackResult(box=up(box), state=state, peak=det.peak if det else 0.0,
+                           psr=det.psr if det else 0.0, apce=det.apce if det else 0.0,
+                           huber_threshold=float(threshold), search_mode=mode, measured=measured, scale=scale,
+                           model_updated=updated,
+                           search_windows=tuple(up(b) for b in windows), velocity=velocity)
