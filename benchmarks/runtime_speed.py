@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Which inference runtime runs the Siamese networks: OpenCV's DNN module or onnxruntime (CPU), per model.
 
-For every model the project ships (NanoTrack v2, v3, LightTrack-M; core/siamese/params.py VERSIONS), on real
+For every model the project ships (NanoTrack v2, v3, LightTrack-M; core/siamese/params.py VERSIONS; and the
+acquisition's five embedding nets, one embedding of 8 patches in the "search" column), on real
 crops (a frame of a shared sequence, the exemplar and the search crop cut as the tracker cuts them), with 1
 and 2 threads, the two runtimes timed in turn within each repeat (the same load for both on a shared
 machine): the median milliseconds of one exemplar pass (backbone on the exemplar crop) and of one search
@@ -142,6 +143,47 @@ def measure(version: str, threads: int, repeats: int, sequence: Path) -> dict[st
     return out
 
 
+def acquisition_speed(repeats: int, sequence: Path) -> tuple[str, str, str, str]:
+    """The acquisition's five embedding nets (paper 004; acquisition/siamese.py) on 8 real patches: ms per
+    embedding of the 8 in each runtime (one pass of the 5 nets), and cv2.dnn's largest relative difference."""
+    from swir_tracker_ros.acquisition.siamese import MODELS_DIR, NET_NAMES, SiameseFamily, crop_resized
+
+    files, gt = frame_files(sequence), read_gt(sequence)
+    frame = read_frame(files[0])
+    patches = [crop_resized(frame, gt[0].shifted(dx, dy), 64) for dx in (-6, 0, 6) for dy in (-4, 4)][:6]
+    patches += [crop_resized(frame, gt[0], 64), crop_resized(frame, gt[0].scaled(1.2), 64)]
+    ours = SiameseFamily(MODELS_DIR)  # onnxruntime, one thread (acquisition/siamese.py)
+    cv2.setNumThreads(1)
+    dnn = [cv2.dnn.readNetFromONNX(str(MODELS_DIR / f"siamese_{n}.onnx")) for n in NET_NAMES]
+
+    def opencv_embed() -> tuple[np.ndarray, np.ndarray]:
+        saved = ours.nets
+        try:
+            ours.nets = [_DnnSession(n) for n in dnn]
+            return ours.embed_patches(patches)
+        finally:
+            ours.nets = saved
+
+    ref, alt = ours.embed_patches(patches), opencv_embed()
+    rel = max(float(np.abs(a - b).max() / max(1.0, float(np.abs(b).max()))) for a, b in zip(alt, ref))
+    ms = interleaved_ms([lambda: ours.embed_patches(patches), opencv_embed], repeats)
+    return f"{ms[0]:.2f}", f"{ms[1]:.2f}", f"{rel:.1e}", str(len(patches))
+
+
+class _DnnSession:
+    """A cv2.dnn net behind onnxruntime's `run` / `get_inputs` (the acquisition nets in the old runtime)."""
+
+    def __init__(self, net: cv2.dnn.Net) -> None:
+        self.net = net
+
+    def get_inputs(self) -> list:
+        return [type("Input", (), {"name": ""})()]
+
+    def run(self, _outputs: object, feeds: dict) -> list[np.ndarray]:
+        self.net.setInput(next(iter(feeds.values())))
+        return [self.net.forward()]
+
+
 def tracker_speed(versions: list[str], sequence: Path, frames: int) -> None:
     """Whole-tracker speed (crops, network, decoding) of each version, the trackers stepped in turn on the
     same frames (the same load for all): median and mean ms per frame, one onnxruntime thread."""
@@ -191,6 +233,9 @@ def main(argv: list[str] | None = None) -> int:
             for threads in a.threads:
                 for runtime, cells in measure(version, threads, a.repeats, seq).items():
                     print(f"| {version} | {runtime} | {threads} | {' | '.join(cells)} |", flush=True)
+        ort_ms, dnn_ms, rel, n = acquisition_speed(a.repeats, seq)
+        print(f"| acquisition (5 nets, {n} patches) | onnxruntime | 1 | - | {ort_ms} | 0.0e+00 |")
+        print(f"| acquisition (5 nets, {n} patches) | cv2.dnn | 1 | - | {dnn_ms} | {rel} |", flush=True)
         if a.tracker_frames:
             ts = Path(a.tracker_sequence)
             tracker_speed(a.versions, ts if ts.is_dir() else SEQUENCES / ts, a.tracker_frames)

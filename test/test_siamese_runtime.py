@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """One runtime for every network (issue 45): on real crops, NanoTrack's outputs in onnxruntime (the project's
 runtime, core/siamese/network.py) equal OpenCV's DNN module's (the runtime before) within 1e-4 of each
-output's scale, and OpenCV's DNN module cannot run LightTrack-M (benchmarks/runtime_speed.py prints both)."""
+output's scale, OpenCV's DNN module cannot run LightTrack-M, and the acquisition's embedding nets agree too
+(benchmarks/runtime_speed.py prints the speeds)."""
 
 from __future__ import annotations
 
@@ -74,3 +75,25 @@ def test_opencv_cannot_run_lighttrack(sequences_dir: Path) -> None:
     dnn = cv2.dnn.readNetFromONNX(str(net.backbone_path))
     dnn.setInput(bgr_batch(x))
     assert dnn.forward().shape != (1, 96, 16, 16)
+
+
+def test_the_acquisition_nets_equal_across_the_runtimes(sequences_dir: Path) -> None:
+    """The acquisition's five embedding nets (paper 004) run in onnxruntime too; their embeddings of real
+    patches equal cv2.dnn's within 1e-4."""
+    from swir_tracker_ros.acquisition.siamese import (
+        MODELS_DIR,
+        NET_NAMES,
+        SiameseFamily,
+        crop_resized,
+        standardise,
+    )
+
+    d = sequences_dir / "otb_crossing"
+    frame, box = read_frame(frame_files(d)[0]), read_gt(d)[0]
+    patches = [crop_resized(frame, box.shifted(dx, 0.0), 64) for dx in (-5.0, 0.0, 5.0)]
+    fam = SiameseFamily(MODELS_DIR)
+    whole, parts = fam.embed_patches(patches)
+    dnn = cv2.dnn.readNetFromONNX(str(MODELS_DIR / f"siamese_{NET_NAMES[0]}.onnx"))
+    dnn.setInput(np.stack([standardise(p) for p in patches])[:, None].astype(np.float32))
+    assert close(whole, dnn.forward().reshape(len(patches), -1)) < TOLERANCE
+    assert parts.shape[:2] == (3, 4)

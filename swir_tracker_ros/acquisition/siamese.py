@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Inference of the five Siamese embedding nets (paper 004 Section 3.2.1): ONNX run by OpenCV's DNN."""
+"""Inference of the five Siamese embedding nets (paper 004 Section 3.2.1): ONNX run by onnxruntime (CPU), the
+project's one runtime for every network (docs/siamese.md, "One runtime"; benchmarks/runtime_speed.py)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import onnxruntime as ort
 
 from swir_tracker_ros.errors import AcquisitionError
 from swir_tracker_ros.types import Box
@@ -39,6 +41,17 @@ def standardise(patch: np.ndarray) -> np.ndarray:
     return (p - p.mean()) / max(float(p.std()), 1.0)
 
 
+def session(path: Path) -> ort.InferenceSession:
+    """An onnxruntime CPU session of one net, one thread; AcquisitionError if it cannot be loaded."""
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = opts.inter_op_num_threads = 1
+    opts.log_severity_level = 3  # errors only
+    try:
+        return ort.InferenceSession(str(path), sess_options=opts, providers=["CPUExecutionProvider"])
+    except Exception as exc:  # onnxruntime's own error types: not a usable model
+        raise AcquisitionError(f"Siamese network {path} cannot be loaded by onnxruntime ({exc})") from None
+
+
 def split_quadrants(patch: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """TL, TR, BL, BR quarters of a square patch (paper 004: "four equal parts")."""
     s = patch.shape[0] // 2
@@ -46,7 +59,7 @@ def split_quadrants(patch: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 class SiameseFamily:
-    """The whole-box net phi and the four quadrant nets phi_p, each an ONNX file run by cv2.dnn."""
+    """The whole-box net phi and the four quadrant nets phi_p, each an ONNX file run by onnxruntime."""
 
     def __init__(self, model_dir: Path | str = MODELS_DIR) -> None:
         model_dir = Path(model_dir)
@@ -55,25 +68,21 @@ class SiameseFamily:
             raise AcquisitionError(f"Siamese model description {meta_path} is missing")
         self.meta = json.loads(meta_path.read_text())
         self.input_size = int(self.meta["input_size"])
-        self.nets: list[cv2.dnn.Net] = []
+        self.nets: list[ort.InferenceSession] = []
         for name in NET_NAMES:
             path = model_dir / f"siamese_{name}.onnx"
             if not path.is_file():
                 raise AcquisitionError(f"Siamese network {path} is missing")
-            net = cv2.dnn.readNetFromONNX(str(path))
-            net.setPreferableBackend(cv2.dnn.DNN_BACKEND_OPENCV)
-            net.setPreferableTarget(cv2.dnn.DNN_TARGET_CPU)
-            self.nets.append(net)
+            self.nets.append(session(path))
 
     @classmethod
     def load_default(cls) -> SiameseFamily:
         return cls(MODELS_DIR)
 
     @staticmethod
-    def _run(net: cv2.dnn.Net, patches: list[np.ndarray]) -> np.ndarray:
+    def _run(net: ort.InferenceSession, patches: list[np.ndarray]) -> np.ndarray:
         blob = np.stack(patches)[:, None, :, :].astype(np.float32)
-        net.setInput(blob)
-        out = net.forward()
+        out = net.run(None, {net.get_inputs()[0].name: blob})[0]
         return np.asarray(out, dtype=np.float32).reshape(len(patches), -1)
 
     def embed_patches(self, patches: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
