@@ -101,3 +101,12 @@ class TrackResult:
     # estimated image velocity of the box centre (input pixels per frame period; the Kalman state, ego
     # shifts excluded): the target's own motion when ego shifts are given, else its motion in the image
     velocity: tuple[float, float] = (0.0, 0.0)
+    # the box a pan-tilt head points at when it is not `box` (None: `box`): while a network-led track's
+    # verdict rejects the network's answer (`box`, state occluded or lost), its last accepted box
+    # (policies/lead.py), so that the head never follows a box the verdict rejected
+    aim: Box | None = None
+
+    @property
+    def aim_box(self) -> Box:
+        """The box a head points at (`aim`, else `box`)."""
+        return self.box if self.aim is None else self.aim

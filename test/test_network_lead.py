@@ -61,25 +61,28 @@ def test_an_accepting_verdict_gives_the_networks_own_boxes(crossing_frames) -> N
     net.init(frames[0], gts[0])
     for frame in frames[1:]:
         res = trk.update(frame)
-        assert res.state is TrackState.TRACKING and res.measured
+        assert res.state is TrackState.TRACKING and res.measured and res.aim is None
         assert res.box.as_tuple() == net.update(frame).box.as_tuple()
 
 
 @pytest.mark.usefixtures("nanotrack_weights")
-def test_a_rejected_frame_holds_the_last_accepted_box(crossing_frames) -> None:
+def test_a_rejected_frame_is_the_networks_answer_while_the_head_aims_at_the_last_accepted_box(
+        crossing_frames) -> None:
     frames, gts = crossing_frames
     params = configuration("network")
     params = replace(params, lead=replace(params.lead, lost_after=3, tiles_per_frame=3))
-    trk = Tracker(params)
+    trk, net = Tracker(params), SiameseTracker(params.base)
     trk.init(frames[0], gts[0])
+    net.init(frames[0], gts[0])
     trk._track.lead.verdict = _AlwaysGone()
     states = []
-    for k, frame in enumerate(frames[1:8]):
+    for frame in frames[1:8]:
         res = trk.update(frame)
         states.append(res.state)
-        assert res.box.as_tuple() == gts[0].as_tuple() and not res.measured
-        assert len(res.search_windows) == (1 if k == 0 else 3)
-        assert res.search_mode is (SearchMode.NORMAL if k == 0 else SearchMode.MULTI_WINDOW)
+        assert res.box.as_tuple() == net.update(frame).box.as_tuple()  # the network follows its answer
+        assert res.aim == gts[0] and res.aim_box == gts[0] and not res.measured  # the head holds
+        assert len(res.search_windows) == 1 + 3  # its own search, the last box's crop, 2 lattice crops
+        assert res.search_mode is SearchMode.MULTI_WINDOW and res.velocity == (0.0, 0.0)
     assert states[:3] == [TrackState.OCCLUDED] * 3 and set(states[3:]) == {TrackState.LOST}
 
 
@@ -106,7 +109,8 @@ def test_redetection_finds_a_target_that_jumped_out_of_the_crop(crossing_frames)
         res = trk.update(moved)
         if res.state is TrackState.TRACKING:
             found = (k, res.box)
+            assert res.aim is None
             break
-        assert res.box.as_tuple() == box.as_tuple()  # held at the last accepted box meanwhile
+        assert res.aim == box  # the head holds at the last accepted box meanwhile
     assert found is not None, "re-detection never found the moved target"
     assert found[1].iou(target) > 0.5

@@ -68,11 +68,12 @@ class TrackOutputs:
         self._was_active = active
         self.detections.publish(track_detections(result if active else None, header, str(self.tracks)))
         if active:
-            pan, tilt = pan_tilt_error(result.box.cx, result.box.cy, intr)
+            aim = result.aim_box  # a network-led track's last accepted box while its verdict rejects `box`
+            pan, tilt = pan_tilt_error(aim.cx, aim.cy, intr)
             angles = Header(stamp=header.stamp, frame_id=self.node.params.angles_frame_id)
             self.error.publish(pan_tilt_to_msg(pan, tilt, angles))
             if motion is not None:
-                rate = target_rate(result.box.cx, result.box.cy, result.velocity, motion[0], intr, motion[1])
+                rate = target_rate(aim.cx, aim.cy, result.velocity, motion[0], intr, motion[1])
                 self.rate.publish(pan_tilt_to_msg(*rate, angles))
         self.publish_state(header, result, intr.width, intr.height)
         for marker in track_markers(result, header):

@@ -3,18 +3,20 @@
 failure verdict (policies/gone.py) says when its answer is not the target, and a re-detection search that
 widens with time finds the target again (issue 46).
 
-Per frame, while the target is tracked: one search around the network's state (SiamFC / SiamRPN++ as
-the authors track: `SiameseTracker`), judged by `GoneVerdict`; a frame it accepts moves the state to the
-network's box (size smoothed by the authors' rate). A frame it rejects does not move the state: the box
-stays the last accepted one, the state is `occluded` (`lost` after `lost_after` frames), so that a head
-never follows a box the verdict rejected.
+Per frame: one search around the network's state (SiamFC / SiamRPN++ as the authors track:
+`SiameseTracker`), judged by `GoneVerdict`; the state moves to the network's box (size smoothed by the
+authors' rate). A frame the verdict accepts is `tracking` and its box the head's aim; one it rejects is
+`occluded` (`lost` after `lost_after` frames) and the head keeps aiming at the last accepted box.
 
-While the target is gone (re-detection mode): every frame searches the native-scale crop around the last
-accepted box, then up to `tiles_per_frame - 1` crops of a lattice around it, nearest rings first, the rings
-widening with time until the lattice covers the whole frame, then starting again from the centre. The
-networks are fully convolutional but their heads take a fixed search size, so a larger area is covered
-by more crops of the same size (each ~3-8 ms) rather than by one larger crop. The best candidate that
-passes the verdict's stricter resume bar (`GoneVerdict.resume_bar`) restarts the track there.
+While the target is gone (re-detection mode): the network goes on following its own answer (as it tracks
+alone: it often comes back by itself, and the frame's box is its answer, the state `occluded`, while the
+head aims at the last accepted box: `TrackResult.aim`); each frame also searches the native-scale crop
+around the last accepted box, then up to `tiles_per_frame - 1` crops of a lattice around it, nearest rings
+first, the rings widening with time until the lattice covers the whole frame, then starting again from the
+centre. The networks are fully convolutional but their heads take a fixed search size, so a larger area is
+covered by more crops of the same size (each ~3-8 ms) rather than by one larger crop. The network's own
+answer, else the best crop that passes the verdict's stricter resume bar (`GoneVerdict.resume_bar`),
+restarts the track.
 """
 
 from __future__ import annotations
@@ -43,6 +45,9 @@ class LeadParams:
            "~4 searches keep NanoTrack above 25 frames/s on one core", 1, 64)
     tile_overlap: float = param(
         0.25, "share of a crop's score-map coverage that neighbouring lattice crops overlap", 0.0, 0.9)
+    velocity_rate: float = param(
+        0.3, "weight of the newest accepted frame's displacement (ego shift removed) in the box velocity "
+             "(exponential mean; TrackResult.velocity, the head's feed-forward)", 0.0, 1.0)
 
 
 def coverage(w: float, h: float, tracker: SiameseTracker) -> float:
@@ -91,6 +96,7 @@ class NetworkLead:
         self.missed = 0  # frames since the last accepted one
         self._tiles: list[tuple[float, float]] = []  # the re-detection lattice still to search
         self.init_size = (0.0, 0.0)
+        self.velocity = (0.0, 0.0)  # input pixels per frame, ego shifts removed (accepted frames)
 
     def start(self, frame: np.ndarray, box: Box, bit_depth: int | None) -> None:
         """The network's template and state from the start box (input pixels)."""
@@ -98,31 +104,40 @@ class NetworkLead:
         self.verdict.reset()
         self.box, self.missed, self._tiles = box, 0, []
         self.init_size = (box.w, box.h)
+        self.velocity = (0.0, 0.0)
 
     def step(self, frame: np.ndarray, bit_depth: int | None, ego_shift: tuple[float, float]) -> TrackResult:
         """One frame (module docstring); TrackerError on an unusable frame (the caller keeps the track)."""
         image = self.net.prepare(frame, bit_depth)
         dx, dy = ego_shift
         self.box = Box(self.box.x + dx, self.box.y + dy, self.box.w, self.box.h)
-        if self.missed == 0:
-            cx, cy = self.net.center
-            self.net.center = (cx + dx, cy + dy)
-            det = self.net.search(image, *self.net.center, *self.net.size)
-            c = cues(det)
-            if not self.verdict.judge_cues(c):
-                return self._accept(det, c, SearchMode.NORMAL, (_crop(det),))
-            self.missed = 1
-            return self._reject(det, c, (_crop(det),))
-        found = [(d, cues(d)) for d in self._redetect(image)]
-        shown = tuple(_crop(d) for d, _ in found)
-        bar = self.verdict.resume_bar()  # the stricter bar of a target found again
-        ok = [(d, c) for d, c in found if c.psr >= bar and c.score >= self.verdict.p.score_gone]
-        if ok:
-            det, c = max(ok, key=lambda dc: dc[0].score)
-            self.verdict.judge_cues(c)  # the verdict's own state: found again
-            return self._accept(det, c, SearchMode.MULTI_WINDOW, shown)
+        cx, cy = self.net.center
+        self.net.center = (cx + dx, cy + dy)
+        det = self.net.search(image, *self.net.center, *self.net.size)  # the network's own search
+        c = cues(det)
+        gone = self.verdict.judge_cues(c)
+        shown: tuple[Box, ...] = (_crop(det),)
+        mode = SearchMode.NORMAL
+        if gone:
+            found = [(d, cues(d)) for d in self._redetect(image)]
+            shown += tuple(_crop(d) for d, _ in found)
+            mode = SearchMode.MULTI_WINDOW
+            bar = self.verdict.resume_bar()  # the stricter bar of a target found again
+            ok = [(d, k) for d, k in found if k.psr >= bar and k.score >= self.verdict.p.score_gone]
+            if ok:
+                det, c = max(ok, key=lambda dk: dk[0].score)
+                gone = self.verdict.judge_cues(c)  # the verdict's own state: found again
+        box = det.smoothed  # the network follows its answer, judged or not (as it tracks alone)
+        self.net.center, self.net.size = box.center, (box.w, box.h)
+        if not gone:
+            if self.missed == 0:  # two accepted frames in a row: their displacement is the target's
+                a, (vx, vy) = self.p.velocity_rate, self.velocity
+                self.velocity = (vx + a * (box.cx - self.box.cx - vx), vy + a * (box.cy - self.box.cy - vy))
+            self.box, self.missed, self._tiles = box, 0, []
+            return self._result(box, TrackState.TRACKING, c, mode, shown)
         self.missed += 1
-        return self._reject(*max(found, key=lambda dc: dc[0].score), shown)
+        state = TrackState.OCCLUDED if self.missed <= self.p.lost_after else TrackState.LOST
+        return self._result(box, state, c, mode, shown, aim=self.box)
 
     def _redetect(self, image: np.ndarray) -> list[SiameseDetection]:
         """The centre crop at the last box, then the next crops of the widening lattice (module docstring)."""
@@ -134,22 +149,10 @@ class NetworkLead:
         take, self._tiles = self._tiles[:self.p.tiles_per_frame - 1], self._tiles[self.p.tiles_per_frame - 1:]
         return [self.net.search(image, cx, cy, b.w, b.h) for cx, cy in [(b.cx, b.cy), *take]]
 
-    def _accept(self, det: SiameseDetection, c: GoneCues, mode: SearchMode,
-                shown: tuple[Box, ...]) -> TrackResult:
-        box = det.smoothed
-        self.net.center, self.net.size = box.center, (box.w, box.h)
-        self.box, self.missed, self._tiles = box, 0, []
-        return self._result(box, TrackState.TRACKING, c, mode, True, shown)
-
-    def _reject(self, det: SiameseDetection, c: GoneCues, shown: tuple[Box, ...]) -> TrackResult:
-        self.net.center, self.net.size = self.box.center, (self.box.w, self.box.h)
-        state = TrackState.OCCLUDED if self.missed <= self.p.lost_after else TrackState.LOST
-        mode = SearchMode.MULTI_WINDOW if self.missed > 1 else SearchMode.NORMAL
-        return self._result(self.box, state, c, mode, False, shown)
-
-    def _result(self, box: Box, state: TrackState, c: GoneCues, mode: SearchMode, measured: bool,
-                shown: tuple[Box, ...]) -> TrackResult:
+    def _result(self, box: Box, state: TrackState, c: GoneCues, mode: SearchMode, shown: tuple[Box, ...],
+                aim: Box | None = None) -> TrackResult:
         w0, h0 = self.init_size
         scale = math.sqrt(box.w * box.h / (w0 * h0)) if w0 > 0 and h0 > 0 else 1.0
         return TrackResult(box=box, state=state, peak=c.score, psr=c.psr, apce=c.apce, search_mode=mode,
-                           measured=measured, scale=scale, search_windows=shown)
+                           measured=aim is None, scale=scale, search_windows=shown,
+                           velocity=self.velocity if aim is None else (0.0, 0.0), aim=aim)
