@@ -152,3 +152,19 @@ def test_relative_resume_bar_follows_the_typical_psr_of_the_tracked_frames():
 def test_shipped_rule_is_the_calibrated_one():
     p = GoneParams()
     assert (p.psr_gone, p.psr_resume, p.score_gone, p.resume_ratio) == (3.5, 40.0, 0.7, 0.0)
+
+
+def test_a_sudden_drop_from_the_typical_psr_is_gone():
+    """psr_drop: a target tracked at PSR ~10^4 whose map falls to PSR 10 (hidden behind an occluder) is gone,
+    although 10 is above psr_gone; a target always tracked at PSR 10 is not."""
+    p = replace(GoneParams(), psr_gone=3.5, psr_resume=40.0, score_gone=0.0, psr_drop=0.005, history=5)
+
+    def run(psrs: list[float]) -> list[bool]:
+        v = GoneVerdict(p)
+        return [v.judge_cues(GoneCues(0.99, 0.8, 1.0, 0.99, s, 30.0, 0.1, 0.05, 0.0)) for s in psrs]
+
+    assert run([1e4] * 10 + [10.0, 10.0, 1e4]) == [False] * 10 + [True, True, False]
+    assert not any(run([10.0] * 13))
+    off = GoneVerdict(replace(p, psr_drop=0.0))
+    assert not any(off.judge_cues(GoneCues(0.99, 0.8, 1.0, 0.99, s, 30.0, 0.1, 0.05, 0.0))
+                   for s in [1e4] * 10 + [10.0])
