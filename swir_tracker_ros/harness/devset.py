@@ -51,7 +51,7 @@ def data_dirs(specs: Sequence[str | Path] | None = None) -> list[Path]:
         for d in development_set() if str(spec) == DEV else [Path(spec)]:
             if not d.is_dir():
                 hint = (f" (build the corpus: ../shared/corpus/README.md, or set ${CORPUS_ENV})"
-                        if str(spec) == DEV else "")
+                        if str(spec) == DEV and d == corpus_dir() else "")
                 raise HarnessError(f"{d}: no such data folder{hint}")
             if d not in out:
                 out.append(d)
