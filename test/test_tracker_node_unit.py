@@ -17,7 +17,7 @@ from std_srvs.srv import Trigger
 
 from msg_adapters.camera_info import Intrinsics, camera_info_from_intrinsics
 from msg_adapters.diagnostics import status_values
-from msg_adapters.geometry import box_from_polygon, pan_tilt_error_from_msg
+from msg_adapters.geometry import box_from_polygon, pan_tilt_error, pan_tilt_error_from_msg
 from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
@@ -33,7 +33,7 @@ from swir_tracker_ros.nodes.tracker_node_params import (
 )
 from swir_tracker_ros.paramfield import flat_fields, rebuild
 from swir_tracker_ros.tracker import TrackerParams
-from swir_tracker_ros.types import TrackState
+from swir_tracker_ros.types import Box, TrackResult, TrackState
 
 W, H, TW = 240, 192, 24
 PATCH = np.random.default_rng(3).integers(0, 2, (TW // 4, TW // 4)).repeat(4, 0).repeat(4, 1)
@@ -374,5 +374,24 @@ def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:
             header=header(1.25), name=["pan", "tilt"], position=[0.03, 0.0]))
         feed(node, scene(100, 96), 1.25)
         assert seen[-1] == (0.0, 0.0)
+    finally:
+        node.destroy_node()
+
+
+def test_the_error_aims_at_the_last_accepted_box_while_the_verdict_rejects_the_box(context: Context) -> None:
+    """Issue 46: a network-led track's rejected frame (state occluded) carries the network's answer as `box`
+    and its last accepted box as `aim`: track/box shows the answer, the head's error comes from `aim`."""
+    node, cap = make(context, fov_h_deg=30.0, ego_motion_compensation=False)
+    try:
+        intr = node.inputs.intrinsics(W, H)
+        answer, held = Box(180.0, 60.0, 20.0, 20.0), Box(100.0, 90.0, 20.0, 20.0)
+        rejected = TrackResult(answer, TrackState.OCCLUDED, aim=held)
+        for result in (rejected, TrackResult(answer, TrackState.TRACKING)):
+            node.outputs.publish(header(1.0, "swir"), result, intr)
+            assert box_from_polygon(cap.box[-1]).cx == pytest.approx(answer.cx)
+            pan, tilt, _ = pan_tilt_error_from_msg(cap.error[-1])
+            aim = result.aim_box
+            assert (pan, tilt) == pytest.approx(pan_tilt_error(aim.cx, aim.cy, intr))
+        assert cap.error[0] != cap.error[1]
     finally:
         node.destroy_node()

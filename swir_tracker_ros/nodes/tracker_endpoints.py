@@ -70,9 +70,10 @@ ENDPOINTS: tuple[Endpoint, ...] = (
              "correlation peak in [0, 1]; id the track's number, new at each start), none while `idle` / "
              "`lost`; the image's header (vision_msgs convention)"),
     Endpoint(topics.PAN_TILT_ERROR, topics.TYPES[topics.PAN_TILT_ERROR], "out", "reliable, 10",
-             "x = pan error, y = tilt error (rad), z = 0; only while `tracking` / `occluded`; the image's "
-             "stamp, frame_id `angles_frame_id` (the head's pan link: joint angles, not a vector in the "
-             "optical frame)"),
+             "x = pan error, y = tilt error (rad), z = 0; only while `tracking` / `occluded`; of the box, "
+             "or while a network-led track's verdict rejects the network's answer of its last accepted box "
+             "(the head never follows a rejected box); the image's stamp, frame_id `angles_frame_id` (the "
+             "head's pan link: joint angles, not a vector in the optical frame)"),
     Endpoint(topics.TARGET_RATE, topics.TYPES[topics.TARGET_RATE], "out", "reliable, 10",
              "the target's angular rate (rad/s, x pan, y tilt, REP-103) in the head's base frame: the Kalman "
              "box-centre velocity through the intrinsics over the camera's median frame period, plus the "
