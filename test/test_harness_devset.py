@@ -13,11 +13,15 @@ import pytest
 
 from swir_tracker_ros.errors import HarnessError
 from swir_tracker_ros.harness import cli
+from swir_tracker_ros.harness.analysis import load_results
+from swir_tracker_ros.harness.compare import BENCH
 from swir_tracker_ros.harness.devset import CORPUS_ENV, DEV, catalogue, data_dirs, development_set, video_of
 from swir_tracker_ros.harness.evaluate import OPE, Run
 from swir_tracker_ros.harness.metrics import absence
 from swir_tracker_ros.harness.protocol import Results, RunStats
+from swir_tracker_ros.harness.runner import Player, play
 from swir_tracker_ros.harness.sources import open_source, read_meta_json
+from swir_tracker_ros.harness.store import RunStore
 from swir_tracker_ros.harness.verdict import KEEP_SE, Pair, by_video, format_verdict, paired_verdict
 from swir_tracker_ros.types import Box
 
@@ -186,3 +190,21 @@ def test_bad_corpus_meta_is_refused(tmp_path, corpus):
         list(open_source(corpus / "b").frames())
     with pytest.raises(HarnessError, match="no such data folder"):
         data_dirs([tmp_path / "nothing"])
+
+
+@pytest.mark.skipif(not (BENCH / ".installed").exists(), reason=".venv-bench missing (`make bench-venv`)")
+def test_opencv_nano_plays_beside_the_others(sequences_dir, tmp_path):
+    """OpenCV's TrackerNano in .venv-bench, given the pinned NanoTrack v2 files, stored like CSRT."""
+    try:
+        player = Player.opencv("Nano")
+    except HarnessError as exc:
+        pytest.skip(str(exc))  # no weights (`make models`)
+    assert player.label == "opencv_nano" and player.code().endswith("/nanotrack-v2")
+    src = open_source(sequences_dir / "otb_crossing", max_frames=12)
+    store = RunStore(tmp_path)
+    play([src], [player], (OPE,), "otb", store)
+    rec = store.load("opencv_nano", "otb_crossing@12", OPE, None)
+    assert len(rec.boxes) == 12 and rec.states[0] == "init"
+    assert set(rec.states[1:]) <= {"tracking", "lost"} and rec.provenance["parameters"]["nanotrack"] == "v2"
+    stats = load_results(store, ["opencv_nano"]).ope("otb_crossing@12", "opencv_nano")
+    assert stats.frames == 11 and stats.success_auc > 0.5
