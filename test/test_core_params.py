@@ -43,7 +43,7 @@ def _params_objects(obj: object) -> list[object]:
 
 
 def test_the_papers_pipelines_and_the_default_are_named_configurations() -> None:
-    assert set(PAPERS) | {DEFAULT_CONFIGURATION, "eco", "siamese", "fused"} == set(CONFIGURATIONS)
+    assert set(PAPERS) | {DEFAULT_CONFIGURATION, "eco", "siamese", "fused", "network"} == set(CONFIGURATIONS)
     assert TrackerParams() == configuration(DEFAULT_CONFIGURATION)  # the dataclass defaults are the default
     for name in CONFIGURATIONS:
         for base in (None, *BASES):
