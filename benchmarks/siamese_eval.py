@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Play the Siamese tracker (core/siamese, NanoTrack v2/v3 weights) over sequences and store its runs in the
-harness's results directory under the labels `siamese_v2` / `siamese_v3`, beside the other runs, so that
-`harness table` scores them with the peers (docs/siamese.md).
+"""Play the Siamese tracker (core/siamese: NanoTrack v2 / v3, LightTrack-M) over sequences and store its runs
+in the harness's results directory under the labels `siamese_v2` / `siamese_v3` / `siamese_lighttrack`, beside
+the other runs, so that `harness table` scores them with the peers (docs/siamese.md).
 
 Run from the repository root (one OpenCV thread per run; `--jobs` runs sequences in parallel):
 
@@ -32,7 +32,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("sequences", nargs="*", help="sequence folders (default: every one in --data)")
     ap.add_argument("--data", default=str(DEFAULT_SEQUENCES), help="folder of sequence folders")
-    ap.add_argument("--versions", nargs="+", default=["v2"], help="NanoTrack model versions")
+    ap.add_argument("--versions", nargs="+", default=["v2"],
+                    help="networks (core/siamese/params.py VERSIONS: v2, v3, lighttrack)")
     ap.add_argument("--whole-pixel", action="store_true",
                     help="the authors' whole-pixel crops (labels siamese_<v>_wholepixel)")
     ap.add_argument("--protocol", nargs="+", choices=PROTOCOLS, default=["ope"])
