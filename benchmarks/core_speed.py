@@ -474,7 +474,7 @@ SIAMESE_SEQUENCE = REPO.parent / "shared" / "data" / "sequences" / "antiuav_ircl
 
 
 class AlwaysGone:
-    """A gone verdict rejecting every search and candidate: configuration `network` in re-detection mode."""
+    """A gone verdict rejecting every search and candidate: configuration `lead` in re-detection mode."""
 
     def __init__(self) -> None:
         from swir_tracker_ros.policies.gone import GoneParams
@@ -522,10 +522,10 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
     fused = Tracker(configuration("fused"))
     fused.init(frames[0], box)
     out["fused"] = timed(fused.update, frames[1:])
-    # configuration `network` (policies/lead.py): tracking, and re-detection mode (a verdict that rejects
+    # configuration `lead` (policies/lead.py): tracking, and re-detection mode (a verdict that rejects
     # every frame: the last box's crop and the lattice's next ones on every frame)
-    for key, redetect in (("network", False), ("network_redetect", True)):
-        trk = Tracker(configuration("network"))
+    for key, redetect in (("lead", False), ("lead_redetect", True)):
+        trk = Tracker(configuration("lead"))
         trk.init(frames[0], box)
         if redetect:
             trk._track.lead.verdict = AlwaysGone()
@@ -542,8 +542,8 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
 SIAMESE_NAMES = {"siamese_v2": "ours Siamese v2 (core/siamese)",
                  "siamese_v3": "ours Siamese v3 (core/siamese)",
                  "fused": "ours, configuration fused (ECO + v2)",
-                 "network": "ours, configuration network (tracking)",
-                 "network_redetect": "ours, configuration network (re-detection)",
+                 "lead": "ours, configuration lead (tracking)",
+                 "lead_redetect": "ours, configuration lead (re-detection)",
                  "opencv_nano": "OpenCV TrackerNano (v2 weights)"}
 
 
@@ -557,7 +557,7 @@ def print_siamese(res: dict, frames: int) -> None:
         r = res[key]
         print(f"  {label:46s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} {r['p95_ms']:8.2f} "
               f"{r['max_ms']:8.2f}")
-    for key in ("siamese_v2", "siamese_v3", "fused", "network", "network_redetect"):
+    for key in ("siamese_v2", "siamese_v3", "fused", "lead", "lead_redetect"):
         print(f"  ratio {key} / TrackerNano: {res[key]['fps'] / res['opencv_nano']['fps']:.2f} "
               f"(cpu {res[key]['cpu_fps'] / res['opencv_nano']['cpu_fps']:.2f})")
 

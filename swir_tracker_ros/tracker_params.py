@@ -103,9 +103,10 @@ class TrackerParams:
                                      f"sweep do not wrap base filter {base.name} (window_policies); set "
                                      "them to None")
         if self.lead is not None:
-            if base.name != "siamese" or self.motion is not None or self.fusion is not None:
-                raise ParameterError("parameter lead: only the Siamese network base filter leads, without "
-                                     "the motion filter and the fusion (set them to None)")
+            if not base.can_lead or self.motion is not None or self.fusion is not None:
+                raise ParameterError(f"parameter lead: base filter {base.name} cannot lead (only the Siamese "
+                                     "network can), nor a track with the motion filter or the fusion (set "
+                                     "them to None)")
             if self.conditioning.downscale != 1.0:
                 raise ParameterError("parameter lead: the network takes the input frame (conditioning."
                                      "downscale must be 1)")

@@ -43,10 +43,14 @@ def _params_objects(obj: object) -> list[object]:
 
 
 def test_the_papers_pipelines_and_the_default_are_named_configurations() -> None:
-    assert set(PAPERS) | {DEFAULT_CONFIGURATION, "eco", "siamese", "fused", "network"} == set(CONFIGURATIONS)
+    assert set(PAPERS) | {DEFAULT_CONFIGURATION, "eco", "siamese", "fused", "lead"} == set(CONFIGURATIONS)
     assert TrackerParams() == configuration(DEFAULT_CONFIGURATION)  # the dataclass defaults are the default
     for name in CONFIGURATIONS:
         for base in (None, *BASES):
+            if name == "lead" and base not in (None, "siamese"):  # the network leads, no other filter
+                with pytest.raises(ParameterError, match="lead"):
+                    configuration(name, base)
+                continue
             configuration(name, base).validate()
     assert configuration("cf").motion is None  # the bare filter
     assert configuration("kalman").motion == MotionParams(robust=False, adaptive_threshold=False,

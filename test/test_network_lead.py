@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The network leads (policies/lead.py, configuration `network`): its boxes are the network's own while the
+"""The network leads (policies/lead.py, configuration `lead`): its boxes are the network's own while the
 verdict accepts them, a rejected frame holds the last accepted box, and the widening re-detection finds a
 target that jumped out of the search crop."""
 
@@ -42,18 +42,18 @@ def test_the_lattice_grows_ring_by_ring_until_it_covers_the_frame() -> None:
     assert (100.0, 30.0) in far and len(far) == len(set(far))
 
 
-def test_the_network_configuration_only_runs_on_the_network() -> None:
+def test_the_lead_configuration_only_runs_on_the_network() -> None:
     for base in BASES:
         if base == "siamese":
             continue
         with pytest.raises(ParameterError, match="lead"):
-            configuration("network", base)
+            configuration("lead", base)
 
 
 @pytest.mark.usefixtures("nanotrack_weights")
 def test_an_accepting_verdict_gives_the_networks_own_boxes(crossing_frames) -> None:
     frames, gts = crossing_frames
-    params = configuration("network")
+    params = configuration("lead")
     params = replace(params, lead=replace(params.lead, gone=replace(params.lead.gone, psr_gone=0.0,
                                                                     score_gone=0.0)))  # never gone
     trk, net = Tracker(params), SiameseTracker(params.base)
@@ -69,7 +69,7 @@ def test_an_accepting_verdict_gives_the_networks_own_boxes(crossing_frames) -> N
 def test_a_rejected_frame_is_the_networks_answer_while_the_head_aims_at_the_last_accepted_box(
         crossing_frames) -> None:
     frames, gts = crossing_frames
-    params = configuration("network")
+    params = configuration("lead")
     params = replace(params, lead=replace(params.lead, lost_after=3, tiles_per_frame=3))
     trk, net = Tracker(params), SiameseTracker(params.base)
     trk.init(frames[0], gts[0])
@@ -89,7 +89,7 @@ def test_a_rejected_frame_is_the_networks_answer_while_the_head_aims_at_the_last
 @pytest.mark.usefixtures("nanotrack_weights")
 def test_redetection_finds_a_target_that_jumped_out_of_the_crop(crossing_frames) -> None:
     frames, gts = crossing_frames
-    params = configuration("network")
+    params = configuration("lead")
     trk = Tracker(params)
     frame, box = frames[0], gts[0]
     trk.init(frame, box)

@@ -30,8 +30,8 @@ def jogging(sequences_dir: Path) -> tuple[list, list]:
 @pytest.mark.parametrize("name", CONFIGURATIONS)
 def test_every_configuration_tracks_on_every_base_filter(name: str, base: str, jogging: tuple) -> None:
     frames, gts = jogging
-    if name == "network" and base != "siamese":
-        pytest.skip("the network leads only as the network base filter (test_network_lead.py pins the refusal)")
+    if name == "lead" and base != "siamese":
+        pytest.skip("only the network leads (test_network_lead.py pins the refusal)")
     params = configuration(name, base)
     assert isinstance(params.base, BASE_FILTERS[base].Params)
     skip_without_models(params)  # a network's configuration without its weights: skipped with the reason

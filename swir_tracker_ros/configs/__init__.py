@@ -19,8 +19,8 @@ from swir_tracker_ros.configs import (
     eco,
     fused,
     kalman,
+    lead,
     measured,
-    network,
     robust,
     robust_adaptive,
     robust_adaptive_r,
@@ -32,7 +32,7 @@ from swir_tracker_ros.paramfield import param
 from swir_tracker_ros.tracker_params import TrackerParams
 
 _MODULES: tuple[ModuleType, ...] = (cf, kalman, robust, robust_adaptive, robust_adaptive_r, measured, eco,
-                                  siamese, fused, network)
+                                  siamese, fused, lead)
 CONFIGURATIONS: dict[str, Callable[[str | None], TrackerParams]] = {
     m.__name__.rsplit(".", 1)[-1]: m.params for m in _MODULES
 }

@@ -61,6 +61,9 @@ class BaseFilter(ABC):
     # frame's own with `failed`, so its test must have no state (a second call changes nothing), and they
     # take only filters they were measured with
     window_policies: ClassVar[bool] = False
+    # (ours) can it lead a track with its own state (`TrackerParams.lead`, policies/lead.py)? A Siamese
+    # network: it searches from its own state and keeps its own template (`net`, a SiameseTracker)
+    can_lead: ClassVar[bool] = False
 
     padding: float  # a window is (1 + padding) x the target
     learning_rate: float  # the rate of a confident frame's `train`

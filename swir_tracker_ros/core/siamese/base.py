@@ -44,6 +44,7 @@ class SiameseBase(BaseFilter):
     robust_method = "A4"
     threshold_map: ThresholdMap = PAPER000_KCF
     own_scale = True
+    can_lead = True  # the network tracks from its own state (policies/lead.py)
     learning_rate = 1.0  # the template is not trained: `train` only follows the posterior box
 
     def __init__(self, fp: SiameseParams, w: float, h: float) -> None:
