@@ -33,6 +33,11 @@ def needs_network(p: TrackerParams) -> bool:
     return isinstance(p.base, SiameseParams) or p.fusion is not None
 
 
+def network_of(p: TrackerParams) -> SiameseParams:
+    """The parameters of the network a configuration builds first (its base filter's, else the fusion's)."""
+    return p.base if isinstance(p.base, SiameseParams) else p.fusion.network
+
+
 NETWORK_CONFIGURATIONS = [n for n in CONFIGURATIONS if needs_network(configuration(n))]
 
 
@@ -60,7 +65,8 @@ def test_a_network_configuration_refuses_to_build_and_the_others_build(name: str
         Tracker(params)
     line = str(err.value)
     assert "\n" not in line and str(no_models) in line
-    assert "make models" in line and ENV_VAR in line and NANO_URL in line, line
+    page = weights.pinned(network_of(params).constants.backbone).source.page
+    assert "make models" in line and ENV_VAR in line and page in line, line
     assert missing_models(params) == line
 
 
@@ -92,8 +98,9 @@ def test_the_node_exits_2_at_start_up_with_one_line(name: str, no_models: Path) 
     lines = [t for t in out.splitlines() if "cannot start" in t]
     assert len(lines) == 1, out
     line = lines[0]
-    assert "nanotrack_backbone_sim.onnx is missing" in line and "make models" in line, line
-    assert ENV_VAR in line and NANO_URL in line, line
+    backbone = network_of(configuration(name)).constants.backbone  # its network's first file (v2, v3, ...)
+    assert f"{backbone} is missing" in line and "make models" in line, line
+    assert ENV_VAR in line and weights.pinned(backbone).source.page in line, line
     assert seconds < 30.0, f"{seconds:.1f} s to refuse"  # at start-up, not when a target is picked
 
 
