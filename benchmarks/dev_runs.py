@@ -110,16 +110,26 @@ def main(argv: list[str] | None = None) -> int:
         chosen = players(a.only, say)
         say(f"{len(sources)} sequences from {', '.join(map(str, dirs))}; {len(chosen)} trackers into "
             f"{store.root}")
-        for p in chosen:
-            t0 = time.perf_counter()
-            rep = play(sources, [p], (OPE,), "otb", store, a.jobs, a.rerun, say)
-            say(f"== {p.label}: {rep.computed} run(s) played, {rep.reused} reused, {rep.replaced} replaced "
-                f"({time.perf_counter() - t0:.0f} s)")
     except HarnessError as exc:
         print(f"dev_runs: error: {exc}", file=sys.stderr)
         return 2
-    labels = " ".join(p.label for p in chosen)
-    print(f"stored: {labels}\n  .venv/bin/harness table {labels} --protocol ope")
+    failed = []
+    for p in chosen:  # one label after the other; a label whose stored runs are stale does not stop the rest
+        t0 = time.perf_counter()
+        try:
+            rep = play(sources, [p], (OPE,), "otb", store, a.jobs, a.rerun, say)
+        except HarnessError as exc:
+            failed.append(p.label)
+            print(f"dev_runs: error: {p.label}: {exc}", file=sys.stderr)
+            continue
+        say(f"== {p.label}: {rep.computed} run(s) played, {rep.reused} reused, {rep.replaced} replaced "
+            f"({time.perf_counter() - t0:.0f} s)")
+    labels = " ".join(p.label for p in chosen if p.label not in failed)
+    if labels:
+        print(f"stored: {labels}\n  .venv/bin/harness table {labels} --protocol ope")
+    if failed:
+        print(f"dev_runs: not stored: {' '.join(failed)} (errors above)", file=sys.stderr)
+        return 2
     return 0
 
 
