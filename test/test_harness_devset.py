@@ -17,7 +17,7 @@ from swir_tracker_ros.harness.analysis import load_results
 from swir_tracker_ros.harness.compare import BENCH
 from swir_tracker_ros.harness.devset import CORPUS_ENV, DEV, catalogue, data_dirs, development_set, video_of
 from swir_tracker_ros.harness.evaluate import OPE, Run
-from swir_tracker_ros.harness.metrics import absence
+from swir_tracker_ros.harness.metrics import SRE_PERTURBATIONS, absence
 from swir_tracker_ros.harness.protocol import Results, RunStats
 from swir_tracker_ros.harness.runner import Player, play
 from swir_tracker_ros.harness.sources import open_source, read_meta_json
@@ -99,6 +99,21 @@ def test_the_paired_statistic_on_known_numbers():
     assert (js["videos"], js["wins"], js["losses"]) == (3, 2, 1)
     assert js["mean_diff"] == pytest.approx(0.04) and js["se"] == pytest.approx(0.06 / math.sqrt(3))
     assert [p["diff"] for p in js["per_video"]] == pytest.approx([0.10, -0.02, 0.04])
+    assert v.sre is None and js["sre"] is None  # no SRE runs stored: no second view
+    # the SRE view: per sequence the mean and spread over the 12 starts, paired over videos like OPE
+    res = _results(per_seq, videos)
+    for seq, (a, b) in per_seq.items():
+        if seq == "v3_w2":
+            continue  # a sequence without every start is left out of the view
+        for i, p in enumerate(SRE_PERTURBATIONS):
+            res.add(seq, "base", p, RunStats(a + (0.1 if i == 0 else 0.0), 0.5, 0, 0, 10, 0.0))
+            res.add(seq, "cand", p, RunStats(b, 0.5, 0, 0, 10, 0.0))
+    sre = paired_verdict(res, "base", "cand")
+    assert sre.videos.mean_diff == pytest.approx(0.04)  # the call stays on OPE
+    assert sre.sre is not None and sre.sre.n == 3 and sre.sre_spread == pytest.approx((0.1, 0.0))
+    # SRE means: base a + 0.1 / 12 on every sequence; per video v1 0.1, s2 -0.02, v3 (v3_w1 only) 0.06
+    assert [p.diff for p in sre.sre.pairs] == pytest.approx([x - 0.1 / 12 for x in (0.10, -0.02, 0.06)])
+    assert "SRE view (4 sequences with every start, 3 videos)" in format_verdict(sre)
     # a gain larger than 2 SE is kept
     up = by_video([Pair("a", 0.5, 0.6), Pair("b", 0.5, 0.62), Pair("c", 0.5, 0.58)], {})
     assert up.keep and up.mean_diff > KEEP_SE * up.se
