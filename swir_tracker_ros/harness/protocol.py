@@ -25,6 +25,7 @@ import numpy as np
 from swir_tracker_ros.harness.evaluate import OPE, Run
 from swir_tracker_ros.harness.metrics import (
     SRE_PERTURBATIONS,
+    Absence,
     absence,
     auc,
     carried_truth,
@@ -89,19 +90,21 @@ class RunStats:
                    s.precision_curve, s.success_curve)
 
     @property
+    def absence_counts(self) -> Absence:
+        """The counts of the absent and present frames (`metrics.Absence`: its rates)."""
+        return Absence(self.absent, self.gone, self.frames, self.false_loss, self.false_tracking_01)
+
+    @property
     def gone_recall(self) -> float | None:
-        """Share of the absent frames the tracker said gone (None without absent frames)."""
-        return self.gone / self.absent if self.absent else None
+        return self.absence_counts.gone_recall
 
     @property
     def false_loss_rate(self) -> float | None:
-        """Share of the frames with ground truth the tracker said gone."""
-        return self.false_loss / self.frames if self.frames else None
+        return self.absence_counts.false_loss_rate
 
     @property
     def false_tracking_rate(self) -> float | None:
-        """Share of the frames with ground truth in state tracking with IoU < 0.1."""
-        return self.false_tracking_01 / self.frames if self.frames else None
+        return self.absence_counts.false_tracking_rate
 
     def to_json(self, curves: bool = False) -> dict:
         d = asdict(self)

@@ -21,6 +21,7 @@ The exemplar features are computed once per template (`set_exemplar`), the searc
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from pathlib import Path
 
 import numpy as np
@@ -71,20 +72,20 @@ def require(constants: VersionConstants, model_dir: str | Path | None = None) ->
     return [locate(rel, model_dir) for rel in constants.files]
 
 
-class NanoNet:
-    """The backbone and head of one NanoTrack version, loaded from their verified ONNX files."""
+class SiameseNet(ABC):
+    """What both families share: the exemplar's features kept as the template (`set_exemplar`), a search
+    against it (`search`: the family's backbone features of the crop through its head, `_head_maps`)."""
 
-    def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
-                 threads: int = 1) -> None:
-        self.backbone_path, self.head_path = require(constants, model_dir)
-        self._backbone = session(self.backbone_path, threads, free_spatial=True)
-        self._head = session(self.head_path, threads)
-        self._input = self._backbone.get_inputs()[0].name
+    def __init__(self) -> None:
         self._z: np.ndarray | None = None
 
+    @abstractmethod
     def features(self, patch: np.ndarray) -> np.ndarray:
-        """Backbone features of an SxS (x3) uint8 crop."""
-        return self._backbone.run(None, {self._input: blob(patch)})[0]
+        """Backbone features of a uint8 crop."""
+
+    @abstractmethod
+    def _head_maps(self, x: np.ndarray, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The head's score and side-distance maps of search features `x` against the template."""
 
     def set_exemplar(self, patch: np.ndarray) -> None:
         """Compute and keep the exemplar's features (the template)."""
@@ -95,10 +96,30 @@ class NanoNet:
         return self._z is not None
 
     def search(self, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(foreground probability S x S, side distances 4 x S x S) of a search crop against the exemplar."""
+        """(foreground score S x S, side distances 4 x S x S) of a search crop against the exemplar."""
         if self._z is None:
             raise TrackerError("the Siamese network has no exemplar yet: call init() first")
-        cls, loc = self._head.run(["output1", "output2"], {"input1": self._z, "input2": self.features(patch)})
+        return self._head_maps(self.features(patch), patch)
+
+
+class NanoNet(SiameseNet):
+    """The backbone and head of one NanoTrack version, loaded from their verified ONNX files."""
+
+    def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
+                 threads: int = 1) -> None:
+        super().__init__()
+        self.backbone_path, self.head_path = require(constants, model_dir)
+        self._backbone = session(self.backbone_path, threads, free_spatial=True)
+        self._head = session(self.head_path, threads)
+        self._input = self._backbone.get_inputs()[0].name
+
+    def features(self, patch: np.ndarray) -> np.ndarray:
+        """Backbone features of an SxS (x3) uint8 crop."""
+        return self._backbone.run(None, {self._input: blob(patch)})[0]
+
+    def _head_maps(self, x: np.ndarray, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Softmax foreground probability and side distances of the head's `output1` / `output2`."""
+        cls, loc = self._head.run(["output1", "output2"], {"input1": self._z, "input2": x})
         return softmax_score(cls[0]), loc[0]
 
 
@@ -109,11 +130,12 @@ def bgr_batch(patch: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(patch, dtype=np.uint8)[None]
 
 
-class LightNet:
+class LightNet(SiameseNet):
     """LightTrack-M's backbone and its two heads (16 x 16 and 18 x 18 search maps), from verified files."""
 
     def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
                  threads: int = 1) -> None:
+        super().__init__()
         paths = require(constants, model_dir)
         self.backbone_path, self.head_path = paths[0], paths[1]
         self._backbone = session(paths[0], threads)
@@ -121,24 +143,13 @@ class LightNet:
         for path in paths[1:]:
             head = session(path, threads)
             self._heads[int(head.get_inputs()[1].shape[-1])] = head  # xf's side: 16 or 18
-        self._z: np.ndarray | None = None
 
     def features(self, patch: np.ndarray) -> np.ndarray:
         """Backbone features (1 x 96 x S/16 x S/16) of an SxS (x3) uint8 crop."""
         return self._backbone.run(None, {"image": bgr_batch(patch)})[0]
 
-    def set_exemplar(self, patch: np.ndarray) -> None:
-        self._z = self.features(patch)
-
-    @property
-    def has_exemplar(self) -> bool:
-        return self._z is not None
-
-    def search(self, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(sigmoid score S x S, side distances 4 x S x S) of a search crop against the exemplar."""
-        if self._z is None:
-            raise TrackerError("the Siamese network has no exemplar yet: call init() first")
-        x = self.features(patch)
+    def _head_maps(self, x: np.ndarray, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Sigmoid score and side distances of the head for this crop's map size."""
         head = self._heads.get(int(x.shape[-1]))
         if head is None:
             raise TrackerError(f"no LightTrack head for a {x.shape[-1]}x{x.shape[-1]} search map (crop "
@@ -152,6 +163,6 @@ NETWORKS = {"nanotrack": NanoNet, "lighttrack": LightNet}
 
 
 def network(constants: VersionConstants, model_dir: str | Path | None = None,
-            threads: int = 1) -> NanoNet | LightNet:
+            threads: int = 1) -> SiameseNet:
     """The verified, loaded network of a version (ModelError without its files)."""
     return NETWORKS[constants.family](constants, model_dir, threads)
