@@ -65,9 +65,9 @@ def test_missing_models_raise(tmp_path: Path) -> None:
 @pytest.mark.skipif(not TRAIN_PY.exists(), reason=(
     "training venv .venv-train is absent (torch is a training-only extra: "
     "python3 -m venv .venv-train && .venv-train/bin/pip install -r requirements-train.txt)"))
-def test_onnx_through_cv2_dnn_matches_torch_embeddings(shared_dir: Path) -> None:
+def test_onnx_through_onnxruntime_matches_torch_embeddings(shared_dir: Path) -> None:
     proc = subprocess.run([str(TRAIN_PY), str(REPO / "training" / "train_siamese.py"), "--verify",
                            "--shared", str(shared_dir), "--tol", "1e-4"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "max |torch - cv2.dnn|" in proc.stdout
+    assert "max |torch - onnxruntime|" in proc.stdout

@@ -4,7 +4,7 @@
 Run in the training-only venv (torch is not a runtime dependency):
     python3 -m venv .venv-train && .venv-train/bin/pip install -r requirements-train.txt
     nice .venv-train/bin/python training/train_siamese.py            # writes swir_tracker_ros/models/
-    .venv-train/bin/python training/train_siamese.py --verify        # ONNX via cv2.dnn vs torch embeddings
+    .venv-train/bin/python training/train_siamese.py --verify        # ONNX via onnxruntime vs torch embeddings
 Fixed seeds and a fixed thread count make a rerun on the same machine reproduce the shipped weights.
 """
 
@@ -213,7 +213,7 @@ def load_from_onnx(model_dir: Path) -> list[Embedding]:
 
 
 def verify(shared: Path, model_dir: Path, tol: float) -> float:
-    """Max |torch - cv2.dnn| embedding difference on real held-out crops; raises SystemExit above tol."""
+    """Max |torch - onnxruntime| embedding difference on real held-out crops; raises SystemExit above tol."""
     val = validation_set(shared, SEED)
     o = (RAW - INPUT_SIZE) // 2
     raw = [c[o : o + INPUT_SIZE, o : o + INPUT_SIZE].astype(np.float32) for crops in val.values()
@@ -225,7 +225,7 @@ def verify(shared: Path, model_dir: Path, tol: float) -> float:
     whole, parts = fam.embed_patches(raw)  # standardises inside, as at run time
     diff = max(float(np.abs(whole - ref[0]).max()),
                *(float(np.abs(parts[:, q] - ref[1 + q]).max()) for q in range(4)))
-    print(f"verify: {len(raw)} crops, max |torch - cv2.dnn| = {diff:.2e} (tolerance {tol:.0e})")
+    print(f"verify: {len(raw)} crops, max |torch - onnxruntime| = {diff:.2e} (tolerance {tol:.0e})")
     if diff > tol:
         raise SystemExit(1)
     return diff
@@ -237,7 +237,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=MODELS_DIR)
     ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--batch", type=int, default=32, help="pairs per step")
-    ap.add_argument("--verify", action="store_true", help="compare ONNX (cv2.dnn) and torch embeddings")
+    ap.add_argument("--verify", action="store_true", help="compare ONNX (onnxruntime, as at run time) and torch embeddings")
     ap.add_argument("--tol", type=float, default=1e-4)
     args = ap.parse_args(argv)
     if args.verify:
