@@ -4,7 +4,7 @@
 Run in the training-only venv (torch is not a runtime dependency):
     python3 -m venv .venv-train && .venv-train/bin/pip install -r requirements-train.txt
     nice .venv-train/bin/python training/train_siamese.py            # writes swir_tracker_ros/models/
-    .venv-train/bin/python training/train_siamese.py --verify        # ONNX via onnxruntime vs torch embeddings
+    .venv-train/bin/python training/train_siamese.py --verify        # onnxruntime vs torch embeddings
 Fixed seeds and a fixed thread count make a rerun on the same machine reproduce the shipped weights.
 """
 
@@ -237,7 +237,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=MODELS_DIR)
     ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--batch", type=int, default=32, help="pairs per step")
-    ap.add_argument("--verify", action="store_true", help="compare ONNX (onnxruntime, as at run time) and torch embeddings")
+    ap.add_argument("--verify", action="store_true", help="compare onnxruntime and torch embeddings")
     ap.add_argument("--tol", type=float, default=1e-4)
     args = ap.parse_args(argv)
     if args.verify:
