@@ -41,8 +41,9 @@ class LeadParams:
     lost_after: int = param(
         250, "frames in re-detection before the state becomes `lost` (the search goes on)", 1, 100000)
     tiles_per_frame: int = param(
-        4, "network searches per frame in re-detection mode (the first at the last box): sets its cost, "
-           "~4 searches keep NanoTrack above 25 frames/s on one core", 1, 64)
+        4, "crops searched per frame in re-detection mode besides the network's own search (the first at "
+           "the last accepted box, the others on the lattice): sets its cost; 1 + 4 searches ran NanoTrack "
+           "v3 at 31 CPU frames/s at 640x512 on one core (benchmarks/core_speed.py)", 1, 64)
     tile_overlap: float = param(
         0.25, "share of a crop's score-map coverage that neighbouring lattice crops overlap", 0.0, 0.9)
     velocity_rate: float = param(
