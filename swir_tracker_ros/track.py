@@ -36,17 +36,19 @@ class Track:
         self.box = box  # the current estimate, conditioned-image pixels
         self.trail = Trail(p.trail_frames)
         self.trail.remember_size(box)
+        self.coast = CoastModel(p.coast)
+        self.motion = MotionFilter(p.motion, base, box) if p.motion is not None else None
+        self.lookalike = LookalikeGuard(p.lookalike, self.trail) if p.lookalike is not None else None
+        self.lead = NetworkLead(p.lead, base.net) if p.lead is not None else None  # type: ignore[attr-defined]
+        if self.lead is not None:  # the network leads: the motion policies and the network only
+            return
         self.verdict = OcclusionVerdict(p.occlusion, base.failed, base.psr_reacquisition)
         self.gate = UpdateGate(p.update)
         self.scales = ScaleSearch(p.scale)
         self.redetection = Redetection(p.redetection)
-        self.coast = CoastModel(p.coast)
         self.memory = AppearanceMemory(p.memory, base) if p.memory is not None else None
-        self.motion = MotionFilter(p.motion, base, box) if p.motion is not None else None
-        self.lookalike = LookalikeGuard(p.lookalike, self.trail) if p.lookalike is not None else None
         self.sweep = LongLossSweep(p.sweep, p.redetection) if p.sweep is not None else None
         self.rejected = RejectedFrames(p.rejected) if p.rejected is not None else None
-        self.lead = NetworkLead(p.lead, base.net) if p.lead is not None else None  # type: ignore[attr-defined]
 
     def clamp_size(self, box: Box) -> Box:
         """Keep the size within [1/4, 4] x the initial size so one bad scale step cannot run away."""

@@ -83,18 +83,18 @@ class Tracker:
             raise TrackerError(f"frame must be a numpy array, got {type(frame).__name__}")
         if bit_depth is not None and not (1 <= int(bit_depth) <= 16):
             raise TrackerError(f"bit_depth={bit_depth!r} must be between 1 and 16")
-        img = self._conditioner(frame, bit_depth)  # ConditioningError is a TrackerError
+        p = self.params
+        if p.lead is None:
+            img = self._conditioner(frame, bit_depth)  # ConditioningError is a TrackerError
         ih, iw = frame.shape[:2]
         if not (0.0 <= box.cx < iw and 0.0 <= box.cy < ih):
             raise TrackerError(f"init box {box.as_tuple()} has its centre outside the {iw}x{ih} image")
-        p = self.params
         ds = p.conditioning.downscale
         b = Box(box.x * ds, box.y * ds, box.w * ds, box.h * ds)
         self._sigma = p.presmooth * math.sqrt(b.w * b.h)
-        img = self._smoothed(img)
         base = make_filter(p.base, b.w, b.h)  # the configuration's base filter, selected once
         if p.lead is None:
-            base.initialise(img, b)
+            base.initialise(self._smoothed(img), b)
         self._track = Track(p, base, b, frame.shape)
         if self._track.lead is not None:  # the network leads from the raw frame (policies/lead.py)
             self._track.lead.start(frame, box, bit_depth)
@@ -131,9 +131,13 @@ class Tracker:
             if not (math.isfinite(frames) and frames > 0.0):
                 frames = 1.0
             if t.lead is not None:  # the network leads (policies/lead.py); a bad frame keeps its track
-                res = t.lead.step(frame, bit_depth, (dx, dy))
-                self._state = res.state
-                return res
+                assert t.motion is not None
+                f = t.lead.step(frame, bit_depth, (dx, dy), frames, t.motion, t.coast, t.trail, t.lookalike)
+                self._state = f.state
+                c = f.cues
+                det = Detection(f.box.cx, f.box.cy, c.score, c.psr, c.apce, 1.0, f.box)
+                return self._result(f.box, f.state, det=det, mode=f.mode, measured=f.aim is None,
+                                    windows=f.shown, aim=f.aim)
             img = self._smoothed(self._conditioner(frame, bit_depth))
         except (*_RECOVERABLE, TypeError):
             return self._result(t.lead.box if t.lead else t.box, TrackState.LOST)  # transient: track kept
@@ -312,7 +316,7 @@ class Tracker:
 
     def _result(self, box: Box, state: TrackState, det: Detection | None = None,
                 mode: SearchMode = SearchMode.NORMAL, measured: bool = False, updated: bool = False,
-                windows: tuple[Box, ...] = (), threshold: float = 0.0) -> TrackResult:
+                windows: tuple[Box, ...] = (), threshold: float = 0.0, aim: Box | None = None) -> TrackResult:
         """A frame's TrackResult in input pixels (the track's box `box`, its velocity, the frame's `det`)."""
         inv = 1.0 / self.params.conditioning.downscale
 
@@ -330,4 +334,5 @@ class Tracker:
                            psr=det.psr if det else 0.0, apce=det.apce if det else 0.0,
                            huber_threshold=float(threshold), search_mode=mode, measured=measured, scale=scale,
                            model_updated=updated,
-                           search_windows=tuple(up(b) for b in windows), velocity=velocity)
+                           search_windows=tuple(up(b) for b in windows), velocity=velocity,
+                           aim=None if aim is None else up(aim))

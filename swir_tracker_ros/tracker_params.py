@@ -96,17 +96,21 @@ class TrackerParams:
                 raise ParameterError(f"parameters {', '.join(idle)}: the bare correlation filter (motion: "
                                      "None) runs none of them; set them to None")
         base = filter_class(self.base)
-        if not base.window_policies:  # BaseFilter.window_policies: what the guard and the sweep may wrap
+        if not base.window_policies and self.lead is None:  # what the guard and the sweep may wrap
             idle = [n for n in ("lookalike", "sweep") if getattr(self, n) is not None]
             if idle:
                 raise ParameterError(f"parameters {', '.join(idle)}: the look-alike guard and the long-loss "
                                      f"sweep do not wrap base filter {base.name} (window_policies); set "
                                      "them to None")
         if self.lead is not None:
-            if not base.can_lead or self.motion is not None or self.fusion is not None:
+            if not base.can_lead or self.motion is None or self.fusion is not None:
                 raise ParameterError(f"parameter lead: base filter {base.name} cannot lead (only the Siamese "
-                                     "network can), nor a track with the motion filter or the fusion (set "
-                                     "them to None)")
+                                     "network can), nor a track without the motion filter (its prediction "
+                                     "judges the network) or with the fusion (set it to None)")
+            idle = [n for n in ("memory", "sweep", "rejected") if getattr(self, n) is not None]
+            if idle:
+                raise ParameterError(f"parameters {', '.join(idle)}: a network-led track runs none of them "
+                                     "(policies/lead.py); set them to None")
             if self.conditioning.downscale != 1.0:
                 raise ParameterError("parameter lead: the network takes the input frame (conditioning."
                                      "downscale must be 1)")

@@ -1,12 +1,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """The network leads (policies/lead.py, configuration `lead`): its boxes are the network's own while the
-verdict accepts them, a rejected frame holds the last accepted box, and the widening re-detection finds a
-target that jumped out of the search crop."""
+verdicts accept them; a rejected frame's box and the head's aim follow the motion's prediction; a candidate
+resumes the track only where the motion allows (ego shifts applied), or anywhere after a long loss when it is
+a strong match."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -15,7 +17,7 @@ from swir_tracker_ros.configs import BASES, configuration
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.policies.gone import GoneCues, GoneParams
-from swir_tracker_ros.policies.lead import coverage, lattice
+from swir_tracker_ros.policies.lead import LeadParams, NetworkLead, coverage, lattice, off_path
 from swir_tracker_ros.tracker import Tracker
 from swir_tracker_ros.types import Box, SearchMode, TrackState
 
@@ -24,6 +26,8 @@ class _AlwaysGone:
     """A verdict that rejects every search and every candidate (the lead's own mechanics alone)."""
 
     p = GoneParams()
+    gone = True
+    typical = None
 
     def judge_cues(self, c: GoneCues) -> bool:
         return True
@@ -65,9 +69,43 @@ def test_an_accepting_verdict_gives_the_networks_own_boxes(crossing_frames) -> N
         assert res.box.as_tuple() == net.update(frame).box.as_tuple()
 
 
+def _candidate(cx: float, cy: float, w: float, h: float) -> SimpleNamespace:
+    """The parts of a SiameseDetection that the resume test reads: the smoothed and the regressed box."""
+    b = Box.from_center(cx, cy, w, h)
+    return SimpleNamespace(smoothed=b, box=b)
+
+
+def _cues(psr: float, score: float = 1.0) -> GoneCues:
+    return GoneCues(score, score, 1.0, score, psr, 10.0, 0.1, 0.1, 0.0)
+
+
+def test_off_path_is_the_centre_distance_in_target_sizes() -> None:
+    pred = Box.from_center(100.0, 100.0, 20.0, 20.0)
+    assert off_path(Box.from_center(130.0, 140.0, 10.0, 10.0), pred, 25.0) == pytest.approx(2.0)
+    assert off_path(pred, pred, 25.0) == 0.0
+
+
+def test_a_candidate_resumes_only_where_the_motion_allows_or_strongly_after_a_long_loss() -> None:
+    p = LeadParams(resume_radius=0.5, resume_growth=0.05, resume_speed=0.0, resume_size=1.5, long_loss=20,
+                   strong_ratio=0.1)
+    lead = NetworkLead(p, None)  # the resume rule reads no network
+    lead.verdict.gone, lead.verdict.typical = True, math.log(1000.0)  # typical tracked PSR 1000
+    pred, size = Box.from_center(100.0, 100.0, 20.0, 20.0), 20.0
+    lead.missed = 10  # radius 0.5 + 10 x 0.05 = 1 target size: 20 px
+    bar = lead.verdict.resume_bar()
+    assert lead._resumes(_candidate(115.0, 100.0, 20.0, 20.0), _cues(bar), pred, size)
+    assert not lead._resumes(_candidate(115.0, 100.0, 20.0, 20.0), _cues(0.9 * bar), pred, size)  # appearance
+    assert not lead._resumes(_candidate(115.0, 100.0, 20.0, 20.0), _cues(bar, 0.5), pred, size)  # score floor
+    assert not lead._resumes(_candidate(125.0, 100.0, 20.0, 20.0), _cues(5000.0), pred, size)  # too far
+    assert not lead._resumes(_candidate(110.0, 100.0, 40.0, 40.0), _cues(5000.0), pred, size)  # grown 2 x
+    lead.missed = 20  # a long loss: a strong match (PSR >= 0.1 x 1000 and the bar) anywhere
+    far = _candidate(400.0, 300.0, 20.0, 20.0)
+    assert lead._resumes(far, _cues(max(bar, 100.0)), pred, size)
+    assert bar < 90.0 and not lead._resumes(far, _cues(90.0), pred, size)  # not a strong one
+
+
 @pytest.mark.usefixtures("nanotrack_weights")
-def test_a_rejected_frame_is_the_networks_answer_while_the_head_aims_at_the_last_accepted_box(
-        crossing_frames) -> None:
+def test_a_rejected_frame_follows_the_prediction_and_the_head_aims_there(crossing_frames) -> None:
     frames, gts = crossing_frames
     params = configuration("lead")
     params = replace(params, lead=replace(params.lead, lost_after=3, tiles_per_frame=3))
@@ -75,42 +113,62 @@ def test_a_rejected_frame_is_the_networks_answer_while_the_head_aims_at_the_last
     trk.init(frames[0], gts[0])
     net.init(frames[0], gts[0])
     trk._track.lead.verdict = _AlwaysGone()
-    states = []
+    states, size = [], math.sqrt(gts[0].w * gts[0].h)
     for frame in frames[1:8]:
         res = trk.update(frame)
         states.append(res.state)
-        assert res.box.as_tuple() == net.update(frame).box.as_tuple()  # the network follows its answer
-        assert res.aim == gts[0] and res.aim_box == gts[0] and not res.measured  # the head holds
-        assert len(res.search_windows) == 1 + 3  # its own search, the last box's crop, 2 lattice crops
+        own = net.update(frame).box  # the network's own answer (its size held at the last accepted one)
+        pred = res.aim  # no accepted motion yet: the prediction stands at the start box
+        assert pred is not None and not res.measured
+        assert (pred.cx, pred.cy, pred.w, pred.h) == pytest.approx((gts[0].cx, gts[0].cy, gts[0].w, gts[0].h))
+        on_path = off_path(own, pred, size) <= params.lead.resume_radius
+        assert res.box.center == pytest.approx(own.center if on_path else pred.center)
+        assert 2 <= len(res.search_windows) <= 1 + 3  # its own search, the prediction's crop, lattice crops
         assert res.search_mode is SearchMode.MULTI_WINDOW and res.velocity == (0.0, 0.0)
+        net.size = (gts[0].w, gts[0].h)
     assert states[:3] == [TrackState.OCCLUDED] * 3 and set(states[3:]) == {TrackState.LOST}
 
 
-@pytest.mark.usefixtures("nanotrack_weights")
-def test_redetection_finds_a_target_that_jumped_out_of_the_crop(crossing_frames) -> None:
-    frames, gts = crossing_frames
-    params = configuration("lead")
-    trk = Tracker(params)
+def _moved_scene(frames, gts):
+    """The first frame and its box, and the same picture moved sideways by more than a search crop's span."""
     frame, box = frames[0], gts[0]
-    trk.init(frame, box)
-    net = SiameseTracker(params.base)
-    span = coverage(box.w, box.h, net)
+    span = coverage(box.w, box.h, SiameseTracker(configuration("lead").base))
     w = frame.shape[1]
-    # the whole picture moved by more than a search crop's span: the target is outside the first search
     dx = int(min(1.5 * span, w - box.x - box.w - 1)) if box.cx < w / 2 else -int(min(1.5 * span, box.x - 1))
     assert abs(dx) > 0.5 * span
-    moved = np.roll(frame, dx, axis=1)
-    target = Box(box.x + dx, box.y, box.w, box.h)
+    return frame, box, dx, np.roll(frame, dx, axis=1), Box(box.x + dx, box.y, box.w, box.h)
+
+
+@pytest.mark.usefixtures("nanotrack_weights")
+def test_redetection_follows_the_ego_shift_to_a_target_that_left_the_crop(crossing_frames) -> None:
+    frame, box, dx, moved, target = _moved_scene(*crossing_frames)
+    trk = Tracker(configuration("lead"))
+    trk.init(frame, box)
     blank = np.full_like(frame, int(frame.mean()))  # the target is gone: nothing but the mean grey
-    for _ in range(2):
-        assert trk.update(blank).state is TrackState.OCCLUDED
+    assert trk.update(blank).state is TrackState.OCCLUDED
+    res = trk.update(moved, ego_shift=(float(dx), 0.0))  # the head's own motion moved the picture
+    for _ in range(3):
+        if res.state is TrackState.TRACKING:
+            break
+        res = trk.update(moved)
+    assert res.state is TrackState.TRACKING and res.aim is None and res.box.iou(target) > 0.5
+
+
+@pytest.mark.usefixtures("nanotrack_weights")
+def test_a_far_candidate_resumes_only_after_a_long_loss(crossing_frames) -> None:
+    frame, box, _dx, moved, target = _moved_scene(*crossing_frames)
+    params = configuration("lead")
+    params = replace(params, lead=replace(params.lead, long_loss=6))
+    trk = Tracker(params)
+    trk.init(frame, box)
+    blank = np.full_like(frame, int(frame.mean()))
+    assert trk.update(blank).state is TrackState.OCCLUDED
     found = None
-    for k in range(12):
+    for k in range(2, 40):  # k: frames since the last accepted one
         res = trk.update(moved)
         if res.state is TrackState.TRACKING:
             found = (k, res.box)
-            assert res.aim is None
             break
-        assert res.aim == box  # the head holds at the last accepted box meanwhile
-    assert found is not None, "re-detection never found the moved target"
-    assert found[1].iou(target) > 0.5
+        assert res.aim is not None and res.aim.center == pytest.approx(box.center)  # held: nothing moved
+    assert found is not None, "the long-loss search never found the moved target"
+    assert found[0] >= 6 and found[1].iou(target) > 0.5  # not before the long loss: the motion forbade it

@@ -11,7 +11,9 @@ from dataclasses import replace
 
 from swir_tracker_ros.configs.bases import base_params
 from swir_tracker_ros.core.siamese.params import SiameseParams
+from swir_tracker_ros.policies.coast import CoastParams
 from swir_tracker_ros.policies.lead import LeadParams
+from swir_tracker_ros.policies.motion import MotionParams
 from swir_tracker_ros.tracker_params import TrackerParams
 
 NETWORK = "v3"
@@ -20,9 +22,14 @@ SE 0.024) and within TrackerNano's speed; LightTrack-M alone is +0.018 (SE 0.017
 slower per frame (docs/experiments.md, issue 46)."""
 
 
+COAST_FRAMES = 25
+"""Frames a hidden target's prediction keeps the trail's velocity before it holds (1 s at 25 Hz)."""
+
+
 def params(base: str | None = None) -> TrackerParams:
     fp = base_params(base, default="siamese")
     if isinstance(fp, SiameseParams):
         fp = replace(fp, version=NETWORK)
-    return TrackerParams(base=fp, motion=None, memory=None, lookalike=None, sweep=None, rejected=None,
-                         lead=LeadParams(), presmooth=0.0)
+    motion = MotionParams(adaptive_threshold=False, size_velocity=False)  # judges; the network sizes
+    return TrackerParams(base=fp, motion=motion, memory=None, sweep=None, rejected=None,
+                         lead=LeadParams(), coast=CoastParams(frames=COAST_FRAMES), presmooth=0.0)

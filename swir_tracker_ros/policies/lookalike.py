@@ -103,32 +103,43 @@ class LookalikeGuard:
         ex, ey = self.trail.ego
         return x1 + vx * dt + ex, y1 + vy * dt + ey, vx, vy
 
+    def departure(self, cx: float, cy: float, w: float, h: float) -> tuple[float, float, float, float] | None:
+        """The motion reference (`reference`) when a tracked centre (cx, cy) of a w x h box lies further than
+        `distance` from it on one of the first CHECKS frames of a departure (counted here), else None."""
+        ref = self.reference()
+        if ref is None or self.apart(cx, cy, ref[0], ref[1], w, h) <= self.p.distance:
+            self.departed = 0
+            return None
+        self.departed += 1
+        return ref if self.departed <= CHECKS else None  # else the target moved off the reference itself
+
+    def takes_back(self, alt: tuple[float, float], first: tuple[float, float], ref: tuple[float, ...],
+                   w: float, h: float) -> bool:
+        """Where the window at the reference found a peak that may take the box back: near the reference and
+        apart from the first peak (the peaks' own bars are the caller's)."""
+        d = self.p.distance
+        return (self.apart(*alt, ref[0], ref[1], w, h) <= d / 2
+                and self.apart(*alt, *first, w, h) >= d / 2)
+
+    @staticmethod
+    def apart(ax: float, ay: float, bx: float, by: float, w: float, h: float) -> float:
+        """The distance of two centres in box widths and heights (the larger)."""
+        return max(abs(ax - bx) / w, abs(ay - by) / h)
+
     def check(self, base: BaseFilter, img: np.ndarray, det: Detection, pred: Box, wins: list[Box],
               factors: tuple[float, ...], verdict: OcclusionVerdict) -> Takeback | None:
         """The take-back of a tracked frame won by `det` (windows `wins` of sizes `factors` around the
         prediction `pred`), or None when the first peak stays."""
-        ref = self.reference()
+        w, h = pred.w * det.scale, pred.h * det.scale
+        ref = self.departure(det.cx, det.cy, w, h)
         if ref is None:
-            self.departed = 0
             return None
         rx, ry, vx, vy = ref
-        w, h = pred.w * det.scale, pred.h * det.scale
-        d = self.p.distance
-
-        def apart(ax: float, ay: float, bx: float, by: float) -> float:
-            return max(abs(ax - bx) / w, abs(ay - by) / h)
-
-        if apart(det.cx, det.cy, rx, ry) <= d:
-            self.departed = 0
-            return None
-        self.departed += 1
-        if self.departed > CHECKS:  # the target moved off the reference itself (see the class)
-            return None
         extra = scale_windows(rx, ry, pred.w, pred.h, base.padding, (1.0,))[0]
         dets = base.detect(img, [*wins, extra], [*factors, 1.0])
         alt = dets[-1]
         # taking the box back is a re-acquisition: the peak there also passes its bars (peak, PSR)
-        if (apart(alt.cx, alt.cy, rx, ry) <= d / 2 and apart(alt.cx, alt.cy, det.cx, det.cy) >= d / 2
+        if (self.takes_back((alt.cx, alt.cy), (det.cx, det.cy), ref, w, h)
                 and alt.peak >= self.p.ratio * det.peak and not verdict.failed(alt)
                 and not verdict.weak(alt.peak) and not verdict.low_psr(alt.psr)):
             return Takeback(dets, len(dets) - 1, extra, (vx, vy))
