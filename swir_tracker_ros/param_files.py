@@ -12,12 +12,14 @@ import sys
 from pathlib import Path
 
 from swir_tracker_ros.configs import ConfigurationChoice
+from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.demo import config as demo_config
 from swir_tracker_ros.harness.store import REPO
 from swir_tracker_ros.nodes import acquisition_node, positioner_node, tracker_endpoints, tracker_node
 from swir_tracker_ros.nodes.param_docs import ParamsFile, markdown_table, marker, params_yaml, replace_block
 from swir_tracker_ros.nodes.tracker_node_params import TrackerNodeParams
 from swir_tracker_ros.pelco.params import PositionerParams
+from swir_tracker_ros.policies.lead import LeadParams
 from swir_tracker_ros.simulation import scene_camera_node
 from swir_tracker_ros.tracker import TrackerParams
 
@@ -33,6 +35,8 @@ def documented_tables() -> list[tuple[str, type, str]]:
     return [("docs/tracker_node.md", TrackerNodeParams, ""),
             ("docs/tracker_node.md", ConfigurationChoice, "tracker."),
             ("docs/tracker_node.md", TrackerParams, "tracker."),
+            ("docs/tracker_node.md", SiameseParams, "tracker.base."),
+            ("docs/tracker_node.md", LeadParams, "tracker.lead."),
             ("docs/positioner.md", PositionerParams, "")]
 
 

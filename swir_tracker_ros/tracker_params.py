@@ -1,9 +1,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """`TrackerParams`: the tracker's parameters, one Params dataclass per layer and policy it composes.
 
-The defaults are our default configuration (`measured`, swir_tracker_ros/configs/measured.py); the papers'
-configurations (configs/) build theirs in plain code from these, leaving our policies out (None) or setting
-the papers' values. ROS names: `tracker.<field>.<subfield>` (`tracker.base.padding`, `tracker.memory.ratio`).
+The defaults are our correlation-filter configuration (`measured`, swir_tracker_ros/configs/measured.py);
+the papers' configurations and the network-led default (`lead`, configs/lead.py) build theirs in plain code
+from these, leaving policies out (None) or setting their own values. ROS names: `tracker.<field>.<subfield>`
+(`tracker.base.padding`, `tracker.memory.ratio`).
 """
 
 from __future__ import annotations
@@ -61,8 +62,9 @@ class TrackerParams:
         lambda: None, "a Siamese network tracking beside the base filter, one box from both "
         "(policies/fusion.py); none: the base filter alone")
     lead: LeadParams | None = nested(
-        lambda: None, "(ours) the Siamese network base filter leads with its own state, its failure verdict "
-        "and a widening re-detection (policies/lead.py); none: the base filter inside the Kalman layers")
+        lambda: None, "(ours) the Siamese network base filter leads with its own state, judged by its "
+        "appearance and by the motion filter's prediction, with a re-detection around the prediction "
+        "(policies/lead.py); none: the base filter inside the Kalman layers")
     conditioning: ConditioningConfig = nested(
         ConditioningConfig, "frame conditioning before any window is sampled (core/conditioning.py)")
     trail_frames: int = param(

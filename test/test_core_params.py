@@ -43,8 +43,9 @@ def _params_objects(obj: object) -> list[object]:
 
 
 def test_the_papers_pipelines_and_the_default_are_named_configurations() -> None:
-    assert set(PAPERS) | {DEFAULT_CONFIGURATION, "eco", "siamese", "fused", "lead"} == set(CONFIGURATIONS)
-    assert TrackerParams() == configuration(DEFAULT_CONFIGURATION)  # the dataclass defaults are the default
+    assert set(PAPERS) | {"measured", "eco", "siamese", "fused", "lead"} == set(CONFIGURATIONS)
+    assert TrackerParams() == configuration("measured")  # the dataclass defaults: the CF pipeline's layers
+    assert DEFAULT_CONFIGURATION == "lead" and configuration(DEFAULT_CONFIGURATION).lead is not None
     for name in CONFIGURATIONS:
         for base in (None, *BASES):
             if name == "lead" and base not in (None, "siamese"):  # the network leads, no other filter
@@ -102,7 +103,7 @@ def test_only_the_configuration_files_compare_configuration_or_base_names() -> N
 
 
 def test_yaml_and_docs_are_generated_from_the_dataclasses() -> None:
-    leaves = {name: value for name, _, value in flat_fields(TrackerParams)}
+    leaves = {name: value for name, _, value in flat_fields(configuration(DEFAULT_CONFIGURATION))}
     for obj in _params_objects(TrackerParams()):
         for f in dataclasses.fields(obj):
             assert f.metadata.get("doc"), f"{type(obj).__name__}.{f.name} has no doc"

@@ -21,7 +21,7 @@ from msg_adapters.geometry import box_from_polygon, pan_tilt_error, pan_tilt_err
 from msg_adapters.image import numpy_to_image
 from msg_adapters.stamps import header
 from msg_adapters.track_state import track_state_from_msg
-from swir_tracker_ros.configs import DEFAULT_CONFIGURATION, ConfigurationChoice
+from swir_tracker_ros.configs import DEFAULT_CONFIGURATION, ConfigurationChoice, configuration
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.nodes.graph import reported_publishers
 from swir_tracker_ros.nodes.tracker_node import DIAG_NAME, TrackerNode, params_yaml
@@ -32,7 +32,6 @@ from swir_tracker_ros.nodes.tracker_node_params import (
     TrackerNodeParams,
 )
 from swir_tracker_ros.paramfield import flat_fields, rebuild
-from swir_tracker_ros.tracker import TrackerParams
 from swir_tracker_ros.types import Box, TrackResult, TrackState
 
 W, H, TW = 240, 192, 24
@@ -235,7 +234,7 @@ def test_zoom_moves_the_focal_length_the_error_uses(context: Context) -> None:
 
 
 def test_runtime_parameter_changes(context: Context) -> None:
-    node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0])
+    node, _ = make(context, init_box=[88.0, 84.0, 24.0, 24.0], **{"tracker.configuration": "measured"})
     try:
         feed(node, scene(100, 96), 1.0)
         assert not node.set_parameters([Parameter("tracker.base.psr_threshold", value=-1.0)])[0].successful
@@ -325,11 +324,12 @@ def test_params_file_and_docs_list_every_parameter() -> None:
     docs = (REPO / "docs" / "tracker_node.md").read_text()
     choice = {k: core.pop(k) for k in ("configuration", "base_filter")}
     assert ConfigurationChoice(**choice) == ConfigurationChoice()
-    for prefix, cls, values in (("", TrackerNodeParams, doc), ("tracker.", TrackerParams, core)):
-        names = {name for name, _, _ in flat_fields(cls)}
-        hint = f"{cls.__name__}: run `tracker --params-yaml > params/tracker.yaml`"
+    default = configuration(DEFAULT_CONFIGURATION)  # the core's parameters: the default configuration's
+    for prefix, params, values in (("", TrackerNodeParams(), doc), ("tracker.", default, core)):
+        names = {name for name, _, _ in flat_fields(params)}
+        hint = f"{type(params).__name__}: run `tracker --params-yaml > params/tracker.yaml`"
         assert set(_flatten(values)) == names, hint
-        rebuild(cls(), _flatten(values)).validate()
+        rebuild(params, _flatten(values)).validate()
         missing = [n for n in names if f"`{prefix}{n}`" not in docs]
         assert not missing, f"docs/tracker_node.md lacks {missing}"
 
@@ -346,7 +346,8 @@ def test_generated_params_yaml_loads_back_to_the_defaults() -> None:
     core = doc.pop("tracker")
     assert TrackerNodeParams(**doc) == TrackerNodeParams()
     assert (core.pop("configuration"), core.pop("base_filter")) == (DEFAULT_CONFIGURATION, "")
-    assert rebuild(TrackerParams(), _flatten(core)) == TrackerParams()
+    default = configuration(DEFAULT_CONFIGURATION)
+    assert rebuild(configuration(DEFAULT_CONFIGURATION), _flatten(core)) == default
 
 
 def test_head_motion_reaches_the_core_as_ego_shift(context: Context) -> None:

@@ -24,7 +24,7 @@ from msg_adapters.qos import profile
 from msg_adapters.stamps import header_of, stamp_to_seconds
 from msg_adapters.trigger import trigger_reply
 from swir_tracker_ros import topics
-from swir_tracker_ros.configs import ConfigurationChoice
+from swir_tracker_ros.configs import DEFAULT_CONFIGURATION, ConfigurationChoice, configuration
 from swir_tracker_ros.errors import ModelError, ParameterError, TrackerError
 from swir_tracker_ros.nodes.graph import check_topic_names, input_publishers
 from swir_tracker_ros.nodes.param_docs import GENERATED, ParamsFile, usage_lines
@@ -63,7 +63,10 @@ class TrackerNode(Node):
         self.tracker_params = bind_parameters(self, self.choice.build(), prefix=TRACKER_PREFIX,
                                               on_change=self._on_tracker_params, vet=missing_models)
         cv2.setNumThreads(self.params.threads)
-        self.tracker = Tracker(self.tracker_params)  # ModelError (one line, exit 2) without the model files
+        try:
+            self.tracker = Tracker(self.tracker_params)
+        except ModelError as exc:  # one line, exit 2: the network configurations without their model files
+            raise ModelError(f"{exc}; or track without a network: tracker.configuration:=measured") from None
         with signals_deferred():  # a Ctrl-C inside numba's ctypes callbacks would be swallowed there
             Tracker.warm_up()  # the compiled loops load now (~1 s), not on the first tracked frame
         self.stats = FrameStats()
@@ -367,7 +370,7 @@ def usage() -> str:
 PARAMS_FILE = ParamsFile(
     "params/tracker.yaml", "/**",
     (("", TrackerNodeParams, ""),
-     ("tracker", (ConfigurationChoice, TrackerParams),
+     ("tracker", (ConfigurationChoice, configuration(DEFAULT_CONFIGURATION)),
       "the core: a named configuration (swir_tracker_ros/configs/) and its TrackerParams")),
     "Parameters of the `tracker` node (docs/tracker_node.md), every one at its default. " + GENERATED
     + " swir_tracker_ros/nodes/tracker_node_params.py and the core's params, not this file. Ranges are "

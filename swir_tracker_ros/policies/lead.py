@@ -150,6 +150,7 @@ class NetworkLead:
         self.missed = 0  # frames since the last accepted one
         self._tiles: list[tuple[float, float]] = []  # the re-detection lattice still to search
         self._speed = 0.0  # the target's speed when it was lost, target sizes a frame
+        self._pending: Box | None = None  # a candidate away from the prediction, to be confirmed
 
     def start(self, frame: np.ndarray, box: Box, bit_depth: int | None) -> None:
         """The network's template and state from the start box (input pixels)."""
@@ -192,11 +193,16 @@ class NetworkLead:
             ok = [(d, k) for d, k in found[:1] if self._resumes(d, k, pred, size)]
             if not ok and not self._holds(det, c, pred, size):  # other crops only when its own answer left
                 ok = [(d, k) for d, k in found[1:] if self._resumes(d, k, pred, size)]
-            gone = not ok
             if ok:  # the nearest to the prediction: the motion is the tie-break between look-alikes
-                det, c = min(ok, key=lambda dk: off_path(dk[0].smoothed, pred, size))
-                self.verdict.judge_cues(c)  # the verdict's own state: found again
-                resumed = True
+                best, k = min(ok, key=lambda dk: off_path(dk[0].smoothed, pred, size))
+                if self._confirmed(best.smoothed, pred, size):
+                    det, c = best, k
+                    self.verdict.judge_cues(c)  # the verdict's own state: found again
+                    resumed, gone = True, False
+                else:
+                    gone = True
+            else:
+                self._pending = None
         box = det.smoothed  # the network follows its answer, judged or not (as it tracks alone), but while
         self.net.center = box.center  # the target is gone its size stays the last accepted one (it would
         self.net.size = (box.w, box.h) if not gone else (self.box.w, self.box.h)  # grow onto an occluder)
@@ -209,7 +215,7 @@ class NetworkLead:
             if velocity is not None:  # taken back: the reference's motion, from before the look-alike
                 motion.set_velocity(*velocity)
             trail.remember(box)
-            self.box, self.missed, self._tiles = box, 0, []
+            self.box, self.missed, self._tiles, self._pending = box, 0, [], None
             return LeadFrame(box, TrackState.TRACKING, c, mode, shown, None)
         if self.missed == 0:
             coast.start(motion, trail)
@@ -242,6 +248,15 @@ class NetworkLead:
         """The resume radius in target sizes after `missed` frames (LeadParams)."""
         p = self.p
         return p.resume_radius + (p.resume_growth + p.resume_speed * self._speed) * self.missed
+
+    def _confirmed(self, box: Box, pred: Box, size: float) -> bool:
+        """A candidate at the predicted place (within `resume_radius`) resumes at once; one away from it only
+        when the frame before had a candidate within `resume_radius` target sizes of it too (a look-alike's
+        one-frame peak is not the target coming back)."""
+        near = off_path(box, pred, size) <= self.p.resume_radius
+        seen = self._pending is not None and off_path(box, self._pending, size) <= self.p.resume_radius
+        self._pending = None if near or seen else box
+        return near or seen
 
     def _holds(self, det: SiameseDetection, c: GoneCues, pred: Box, size: float) -> bool:
         """The network's own answer still holds the predicted place: within `resume_radius` of the
