@@ -1,0 +1,522 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`harness track SOURCE --box x,y,w,h`: our tracker over one recording of the user's own, from a start box,
+without ground truth or a ROS graph (docs/harness.md "Trying it on a recording").
+
+SOURCE is a video, a folder of frames, a bag or a sequence folder (`recording.open_recording`). The tracker
+is built as `harness eval` builds it (`evaluate.make_tracker_factory`: the default configuration unless one
+is named, `--set` overrides) and is given the frames as the tracker node gives them: the decoded pixels and,
+for 16-bit frames, the bit depth (`--bit-depth`, else what the source says); de-interlacing is the core's
+`conditioning.deinterlace` (`--deinterlace`). Written while tracking, so that an interruption (Ctrl-C) or a
+bad frame keeps what was tracked: the CSV (one row a frame from the start), the annotated video (the node's
+debug picture, `msg_adapters.debug_image`, with the frame number and a mark while the target is gone) and at
+the end the plot of state and score over time. Exit 0, 2 for bad input (one line, nothing tracked or
+written before the refusal), 130 after Ctrl-C (with the outputs written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+import re
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from msg_adapters.debug_image import COLOURS, debug_picture, to_bgr8
+from swir_tracker_ros.errors import HarnessError, SwirTrackerError
+from swir_tracker_ros.harness.bagio import FrameRecord
+from swir_tracker_ros.harness.evaluate import (
+    DEFAULT,
+    Run,
+    TrackerLike,
+    configurations,
+    make_tracker_factory,
+    resolve_configuration,
+)
+from swir_tracker_ros.harness.protocol import RunStats
+from swir_tracker_ros.harness.recording import Recording, open_recording
+from swir_tracker_ros.harness.sources import parse_gt_line
+from swir_tracker_ros.types import Box, TrackResult, TrackState
+
+DEFAULT_OUT = "out/track"
+CSV_COLUMNS = ("frame", "x", "y", "w", "h", "state", "score", "ms", "psr")
+GONE = (TrackState.OCCLUDED, TrackState.LOST)  # the tracker says its target is not in view
+START_COLOUR = (255, 255, 255)
+PROGRESS_PERIOD_S = 0.2
+
+
+# --- the start box ----------------------------------------------------------------------------------------
+
+def parse_box(text: str) -> Box:
+    """`x,y,w,h` in pixels (top-left corner, width, height; commas or spaces) with a positive size."""
+    parts = [p for p in re.split(r"[,\s]+", text.strip()) if p]
+    try:
+        x, y, w, h = (float(p) for p in parts)
+    except ValueError:
+        raise HarnessError(f"--box wants x,y,w,h in pixels, got {text!r}") from None
+    box = Box(x, y, w, h)
+    if not box.is_finite() or w < 1 or h < 1:
+        raise HarnessError(f"--box {text}: width and height must be at least 1 pixel")
+    return box
+
+
+def check_box(box: Box, image: np.ndarray, index: int) -> None:
+    """The box's centre must lie in the image (where the tracker can start on it)."""
+    h, w = image.shape[:2]
+    if not (0.0 <= box.cx < w and 0.0 <= box.cy < h):
+        raise HarnessError(f"box {_fmt_box(box)} lies outside the {w}x{h} image of frame {index} (its centre "
+                           "must be inside)")
+
+
+def _fmt_box(box: Box) -> str:
+    return ",".join(f"{v:g}" for v in box.as_tuple())
+
+
+def gui_missing() -> str | None:
+    """Why `--select` cannot open a window here (no display, OpenCV without a GUI), or None."""
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return "there is no display (DISPLAY is not set)"
+    gui = re.search(r"GUI:\s*(\S+)", cv2.getBuildInformation())
+    if gui is None or gui.group(1).upper() == "NONE":
+        return "this OpenCV has no GUI (opencv-python-headless)"
+    return None
+
+
+def select_box(image: np.ndarray, index: int) -> Box:
+    """The box the user draws on the frame (cv2.selectROI: drag, then Enter or Space; Esc cancels)."""
+    why = gui_missing()
+    if why:
+        raise HarnessError(f"--select cannot open a window: {why}; give the box as --box x,y,w,h")
+    title = f"harness track: draw the target's box on frame {index}, then Enter"
+    x, y, w, h = cv2.selectROI(title, to_bgr8(image), showCrosshair=True, fromCenter=False)
+    cv2.destroyWindow(title)
+    if w < 1 or h < 1:
+        raise HarnessError("--select: no box was drawn")
+    return Box(float(x), float(y), float(w), float(h))
+
+
+def read_gt_file(path: Path) -> list[Box | None]:
+    """A gt.txt-style file: one `x,y,w,h` a frame (blank lines skipped; 0,0,0,0: target absent)."""
+    try:
+        lines = [ln for ln in path.read_text().splitlines() if ln.strip()]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise HarnessError(f"{path}: cannot be read: {exc}") from None
+    return [parse_gt_line(ln, path, k + 1) for k, ln in enumerate(lines)]
+
+
+# --- outputs ----------------------------------------------------------------------------------------------
+
+@dataclass
+class Row:
+    """One tracked frame: the box and state the tracker reported, its score and PSR, its time."""
+
+    frame: int
+    box: Box
+    state: str  # "init" on the start frame, else the TrackState's value
+    score: float | None
+    psr: float | None
+    ms: float
+
+    def csv(self) -> list[str]:
+        nums = [repr(float(v)) for v in self.box.as_tuple()]  # exact: the boxes compare with `harness eval`
+        opt = ["" if v is None else f"{v:.4f}" for v in (self.score, self.psr)]
+        return [str(self.frame), *nums, self.state, opt[0], f"{self.ms:.2f}", opt[1]]
+
+
+def annotate(image: np.ndarray, result: TrackResult | None, start: Box | None, index: int) -> np.ndarray:
+    """The node's debug picture (box, search windows, state line) with the frame number; the start box in
+    white on the start frame; while the target is gone (occluded or lost) the box crossed out and `GONE`."""
+    if start is not None:
+        img = to_bgr8(image)
+        p0, p1 = (round(start.x), round(start.y)), (round(start.x + start.w), round(start.y + start.h))
+        cv2.rectangle(img, p0, p1, START_COLOUR, 2)
+        cv2.putText(img, "start", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.4, START_COLOUR, 1, cv2.LINE_AA)
+    else:
+        img = debug_picture(image, result)
+    h = img.shape[0]
+    cv2.putText(img, f"frame {index}", (4, h - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, START_COLOUR, 1,
+                cv2.LINE_AA)
+    if result is not None and result.state in GONE and result.aim_box.is_finite():
+        b, colour = result.aim_box, COLOURS[result.state]
+        p0, p1 = (round(b.x), round(b.y)), (round(b.x + b.w), round(b.y + b.h))
+        cv2.line(img, p0, p1, colour, 2)
+        cv2.line(img, (p0[0], p1[1]), (p1[0], p0[1]), colour, 2)
+        cv2.putText(img, "GONE", (p0[0], max(p0[1] - 4, 12)), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour, 2,
+                    cv2.LINE_AA)
+    return img
+
+
+class Outputs:
+    """The CSV and the annotated video, written frame by frame (flushed: an abrupt end keeps them), and
+    the plot at `close`."""
+
+    def __init__(self, out_dir: Path, name: str, fps: float, size: tuple[int, int], video: bool) -> None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        self.csv_path = out_dir / f"{name}.csv"
+        self.plot_path = out_dir / f"{name}.png"
+        self.video_path: Path | None = None
+        self._writer: cv2.VideoWriter | None = None
+        if video:
+            self.video_path = out_dir / f"{name}.mp4"
+            self._writer = cv2.VideoWriter(str(self.video_path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+            if not self._writer.isOpened():
+                raise HarnessError(f"{self.video_path}: OpenCV cannot write an MP4 (mp4v) video here; "
+                                   "--no-video leaves it out")
+        self._file = self.csv_path.open("w", newline="")
+        self._csv = csv.writer(self._file)
+        self._csv.writerow(CSV_COLUMNS)
+        self.rows: list[Row] = []
+
+    def add(self, image: np.ndarray, row: Row, result: TrackResult | None, start: Box | None) -> None:
+        self.rows.append(row)
+        self._csv.writerow(row.csv())
+        self._file.flush()
+        if self._writer is not None:
+            self._writer.write(annotate(image, result, start, row.frame))
+
+    def close(self, title: str) -> list[Path]:
+        """Finish the video and the CSV, draw the plot; the paths written."""
+        if self._writer is not None:
+            self._writer.release()
+        self._file.close()
+        plot_track(self.rows, self.plot_path, title)
+        return [p for p in (self.video_path, self.csv_path, self.plot_path) if p is not None]
+
+
+def _rgb(state: TrackState) -> tuple[float, float, float]:
+    b, g, r = COLOURS[state]
+    return (r / 255, g / 255, b / 255)
+
+
+def _runs(frames: list[int], states: list[TrackState]) -> list[tuple[int, int, TrackState]]:
+    """(first frame, last frame, state) of each run of consecutive frames in one state."""
+    out: list[tuple[int, int, TrackState]] = []
+    for f, st in zip(frames, states):
+        if out and out[-1][2] is st:
+            out[-1] = (out[-1][0], f, st)
+        else:
+            out.append((f, f, st))
+    return out
+
+
+def plot_track(rows: list[Row], path: Path, title: str) -> None:
+    """Score (the peak; PSR beside it) over the frames, and the state as a coloured band (matplotlib
+    Agg; the colours of the annotated video)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    frames = [r.frame for r in rows]
+    fig, (ax, bx) = plt.subplots(2, 1, sharex=True, figsize=(8, 4), dpi=100,
+                                 gridspec_kw={"height_ratios": [3, 1]})
+    ax.plot(frames, [math.nan if r.score is None else r.score for r in rows], color="tab:blue", lw=1)
+    ax.set(ylabel="score (peak)", title=title)
+    ax.grid(alpha=0.3)
+    if any(r.psr for r in rows):
+        px = ax.twinx()
+        px.plot(frames, [math.nan if r.psr is None else r.psr for r in rows], color="tab:gray", lw=0.8)
+        px.set_ylabel("PSR", color="tab:gray")
+    states = [TrackState.TRACKING if r.state == "init" else TrackState(r.state) for r in rows]
+    for first, last, state in _runs(frames, states):  # one bar a run of frames in one state
+        bx.broken_barh([(first - 0.5, last - first + 1)], (0, 1), color=_rgb(state))
+    shown = (TrackState.TRACKING, *GONE)
+    bx.legend([plt.Rectangle((0, 0), 1, 1, color=_rgb(st)) for st in shown], [st.value for st in shown],
+              loc="upper right", fontsize=7, ncol=3)
+    bx.set(yticks=[], xlabel="frame", ylabel="state", ylim=(0, 1.6))
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+# --- the frame loop ---------------------------------------------------------------------------------------
+
+@dataclass
+class Session:
+    """What one `track` call did: every frame's box and state as `harness eval` stores them (None and
+    `idle` before the start), the tracked rows, the ground truth where the source has it, and how it
+    ended."""
+
+    pred: list[Box | None] = field(default_factory=list)
+    states: list[str] = field(default_factory=list)
+    gt: list[Box | None] = field(default_factory=list)
+    occluded: list[bool | None] = field(default_factory=list)
+    seconds: float = 0.0  # tracker time (init and updates)
+    wall: float = 0.0  # the whole loop: reading, tracking, writing
+    start: Box | None = None
+    start_index: int = -1
+    size: tuple[int, int] = (0, 0)
+    interrupted: bool = False
+    error: str | None = None  # why the loop stopped early (a bad frame), after writing what was tracked
+    outputs: Outputs | None = None
+
+
+@contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """A second Ctrl-C while the outputs are finished must not cut them short (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+class Progress:
+    """A one-line progress bar on stderr while it is a terminal (nothing otherwise)."""
+
+    def __init__(self, total: int | None, enabled: bool) -> None:
+        self.total, self.enabled = total, enabled and sys.stderr.isatty()
+        self._last = 0.0
+        self._t0 = time.perf_counter()
+
+    def __call__(self, done: int, force: bool = False) -> None:
+        now = time.perf_counter()
+        if not self.enabled or (not force and now - self._last < PROGRESS_PERIOD_S):
+            return
+        self._last = now
+        rate = done / max(now - self._t0, 1e-9)
+        if self.total:
+            share = min(done / self.total, 1.0)
+            bar = "#" * round(30 * share) + "-" * (30 - round(30 * share))
+            text = f"[{bar}] {done}/{self.total} frames, {rate:.1f} fps"
+        else:
+            text = f"{done} frames, {rate:.1f} fps"
+        print(f"\r{text}", end="", file=sys.stderr, flush=True)
+
+    def end(self) -> None:
+        if self.enabled:
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
+
+
+def _depth(image: np.ndarray, bits: int | None) -> int | None:
+    """The bit-depth hint the core gets, as the node gives it: for 16-bit frames only, and only when it
+    is not the full container (None and 16 condition alike)."""
+    return bits if image.dtype.itemsize == 2 and bits not in (None, 8, 16) else None
+
+
+def _row(index: int, result: TrackResult, seconds: float) -> Row:
+    return Row(index, result.box, result.state.value, float(result.peak), float(result.psr), seconds * 1e3)
+
+
+def track_frames(frames: Iterator[FrameRecord], tracker: TrackerLike, box: Box | None, start: int,
+                 bits: int | None, select: bool, open_outputs: Callable[[tuple[int, int]], Outputs],
+                 progress: Progress) -> Session:
+    """Play `tracker` over `frames`: from frame `start` with `box` (None: drawn with `select`, else the
+    frame's ground truth; without either, the first frame at or after `start` with ground truth). The
+    outputs open once the start is accepted; a KeyboardInterrupt or a bad frame after that ends the loop
+    with what was tracked kept (`Session.interrupted`, `Session.error`)."""
+    s = Session()
+    t_loop = time.perf_counter()
+    try:
+        for fr in frames:
+            s.gt.append(fr.gt)
+            s.occluded.append(fr.occluded)
+            if s.outputs is None:
+                start_box = _start_box(fr, box, start, select)
+                if start_box is None:
+                    s.pred.append(None)
+                    s.states.append("idle")
+                    continue
+                _start(s, tracker, fr, start_box, bits, open_outputs)
+            else:
+                _step(s, tracker, fr, bits)
+            progress(len(s.pred))
+    except KeyboardInterrupt:
+        s.interrupted = True
+        if s.outputs is None:
+            raise
+    except HarnessError as exc:
+        if s.outputs is None:
+            raise
+        s.error = str(exc)
+    s.wall = time.perf_counter() - t_loop
+    progress.end()
+    if s.outputs is None:
+        n = len(s.pred)
+        if box is not None or select:
+            raise HarnessError(f"--start {start}: the recording has only {n} frame(s)")
+        raise HarnessError(f"no frame from {start} on has ground truth to start from ({n} frames read); "
+                           "give the start box with --box x,y,w,h")
+    return s
+
+
+def _start_box(fr: FrameRecord, box: Box | None, start: int, select: bool) -> Box | None:
+    """The box to start with on this frame, or None when the start is later."""
+    if fr.index < start:
+        return None
+    if select:
+        return select_box(fr.image, fr.index)
+    if box is not None:
+        return box
+    return fr.gt
+
+
+def _start(s: Session, tracker: TrackerLike, fr: FrameRecord, box: Box, bits: int | None,
+           open_outputs: Callable[[tuple[int, int]], Outputs]) -> None:
+    check_box(box, fr.image, fr.index)
+    t0 = time.perf_counter()
+    try:
+        tracker.init(fr.image, box, bit_depth=_depth(fr.image, bits))
+    except SwirTrackerError as exc:
+        raise HarnessError(f"the tracker cannot start on frame {fr.index}: {exc}") from None
+    dt = time.perf_counter() - t0
+    s.seconds += dt
+    s.start, s.start_index = box, fr.index
+    s.size = (int(fr.image.shape[1]), int(fr.image.shape[0]))
+    s.pred.append(box)
+    s.states.append("init")
+    s.outputs = open_outputs(s.size)
+    s.outputs.add(fr.image, Row(fr.index, box, "init", None, None, dt * 1e3), None, box)
+
+
+def _step(s: Session, tracker: TrackerLike, fr: FrameRecord, bits: int | None) -> None:
+    size = (int(fr.image.shape[1]), int(fr.image.shape[0]))
+    if size != s.size:
+        raise HarnessError(f"frame {fr.index} is {size[0]}x{size[1]}, the frames before it "
+                           f"{s.size[0]}x{s.size[1]}: stopped there")
+    t0 = time.perf_counter()
+    try:
+        res = tracker.update(fr.image, bit_depth=_depth(fr.image, bits))
+    except SwirTrackerError as exc:
+        raise HarnessError(f"tracker update failed on frame {fr.index}: {exc}") from None
+    dt = time.perf_counter() - t0
+    s.seconds += dt
+    s.pred.append(res.box)
+    s.states.append(res.state.value)
+    assert s.outputs is not None
+    s.outputs.add(fr.image, _row(fr.index, res, dt), res, None)
+
+
+# --- the command ------------------------------------------------------------------------------------------
+
+def _scores(s: Session, gt: list[Box | None] | None, fps: float) -> RunStats | None:
+    """OTB OPE scores of the session against `gt` (else the source's own ground truth), frames after the
+    start, scored as `harness eval` scores them (`protocol.RunStats.of`); None without ground truth."""
+    truth = gt if gt is not None else s.gt
+    if not any(g is not None for g in truth):
+        return None
+    n = len(s.pred)
+    truth = (list(truth) + [None] * n)[:n]
+    run = Run(list(s.pred), truth, (list(s.occluded) + [None] * n)[:n], s.seconds, list(s.states),
+              init=s.start, init_index=s.start_index)
+    return RunStats.of(run, fps)
+
+
+def summary(rec: Recording, conf: str, s: Session, paths: list[Path], stats: RunStats | None) -> str:
+    """The one-screen report: frames, shares of the states, speed, scores (with ground truth), files."""
+    rows = s.outputs.rows if s.outputs is not None else []
+    tracked = rows[1:]  # the updates (the start frame is the given box)
+    n = max(len(tracked), 1)
+    share = {st: sum(r.state == st for r in tracked) / n * 100.0 for st in ("tracking", "occluded", "lost")}
+    w, h = s.size
+    lines = [f"{rec.name}: {rec.what} {rec.location}, {w}x{h}, {rec.fps:g} fps; configuration {conf}",
+             f"  start        frame {s.start_index}, box {_fmt_box(s.start) if s.start else '-'}",
+             f"  frames       {len(rows)} tracked (frames {rows[0].frame}-{rows[-1].frame})" if rows else
+             "  frames       none",
+             f"  states       tracking {share['tracking']:.1f} %, occluded {share['occluded']:.1f} %, "
+             f"lost {share['lost']:.1f} % (of the {len(tracked)} frames after the start)"]
+    ms = [r.ms for r in tracked]
+    if ms:
+        lines.append(f"  speed        {len(ms) / max(sum(ms) / 1e3, 1e-9):.1f} fps tracker alone (mean "
+                     f"{np.mean(ms):.1f} ms, max {max(ms):.1f} ms a frame); "
+                     f"{len(rows) / max(s.wall, 1e-9):.1f} fps with reading and writing")
+    if stats is not None:
+        lines.append(f"  ground truth success AUC {stats.success_auc:.3f}, precision@20 "
+                     f"{stats.precision_20:.3f} over {stats.frames} frames after the start (OTB OPE, as "
+                     "`harness eval`)")
+    what = {".mp4": "annotated video", ".csv": "per frame: " + ", ".join(CSV_COLUMNS),
+            ".png": "state and score over time"}
+    for k, p in enumerate(paths):
+        lines.append(f"  {'wrote' if k == 0 else '':<12} {p} ({what[p.suffix]})")
+    if s.interrupted:
+        lines.append(f"  interrupted  (Ctrl-C) after frame {rows[-1].frame}: the files hold what was tracked")
+    return "\n".join(lines)
+
+
+def cmd_track(a: argparse.Namespace) -> int:
+    if a.box and a.select:
+        raise HarnessError("--box and --select both give the start box; use one")
+    if a.start < 0:
+        raise HarnessError(f"--start must be a frame number from 0, got {a.start}")
+    box = parse_box(a.box) if a.box else None
+    gt = read_gt_file(Path(a.gt)) if a.gt else None
+    conf = resolve_configuration(a.configuration)
+    overrides = [*(a.set or [])] + ([f"conditioning.deinterlace={a.deinterlace}"] if a.deinterlace else [])
+    factory = make_tracker_factory(conf, overrides)
+    rec = open_recording(a.source, a.frames, a.image_topic)
+    if box is None and not a.select and not rec.has_truth:
+        why = gui_missing()
+        raise HarnessError("--box x,y,w,h is required" + (f" (--select cannot draw it: {why})" if why else
+                                                          " (or --select to draw it)"))
+    try:
+        tracker = factory()
+    except SwirTrackerError as exc:  # e.g. a ModelError: the configuration's network weights are missing
+        raise HarnessError(f"configuration {conf}: {exc}") from None
+    out_dir = Path(a.out)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise HarnessError(f"--out {out_dir}: a file, not a folder")
+    bits = a.bit_depth or rec.bits
+    progress = Progress(rec.total, not a.quiet)
+
+    def open_outputs(size: tuple[int, int]) -> Outputs:
+        return Outputs(out_dir, rec.name, rec.fps, size, not a.no_video)
+
+    s = track_frames(rec.frames(), tracker, box, a.start, bits, a.select, open_outputs, progress)
+    with _sigint_ignored():
+        assert s.outputs is not None
+        paths = s.outputs.close(f"{rec.name}: {conf} from frame {s.start_index}")
+    print(summary(rec, conf, s, paths, _scores(s, gt, rec.fps)))
+    if s.error:
+        raise HarnessError(f"{s.error}; wrote what was tracked before it ({len(s.outputs.rows)} frames)")
+    return 130 if s.interrupted else 0
+
+
+def add_track_parser(sub: argparse._SubParsersAction) -> None:
+    """The `track` subcommand (registered by cli.build_parser)."""
+    p = sub.add_parser("track", help="our tracker over your own recording (video, frame folder, bag) from a "
+                                     "start box: annotated video, CSV, plot, summary")
+    p.add_argument("source",
+                   help="a video (MP4, AVI, MKV ...), a folder of frames (8/16-bit PNG, TIFF, JPEG; name "
+                        "order), a rosbag2 bag with an image topic, or a sequence folder")
+    p.add_argument("--box", default=None, metavar="x,y,w,h",
+                   help="the target's box on the start frame, pixels (top-left corner, width, height); "
+                        "a sequence folder or a bag with ground truth starts from its box without it")
+    p.add_argument("--select", action="store_true",
+                   help="draw the start box on the start frame (needs a display and OpenCV with a GUI)")
+    p.add_argument("--config", "--configuration", dest="configuration", default=DEFAULT,
+                   choices=(*configurations(), DEFAULT),
+                   help="our configuration (default: the tracker's default configuration)")
+    p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                   help="override a parameter of the configuration (as `harness eval --set`)")
+    p.add_argument("--start", type=int, default=0, metavar="FRAME",
+                   help="the frame (from 0) the box is on; earlier frames are skipped")
+    p.add_argument("--frames", type=int, default=None, help="only the first N frames of the recording")
+    p.add_argument("--bit-depth", type=int, choices=(8, 10, 12, 14, 16), default=None,
+                   help="significant bits of 16-bit frames, as the node's bit_depth (default: what the "
+                        "source says, else the full 16-bit container)")
+    p.add_argument("--deinterlace", choices=("even", "odd"), default=None,
+                   help="track one field of interlaced frames (conditioning.deinterlace)")
+    p.add_argument("--image-topic", default=None, help="a bag's image topic (default: /camera/image_raw, "
+                                                       "else its only sensor_msgs/Image topic)")
+    p.add_argument("--gt", default=None, metavar="FILE",
+                   help="ground truth to score against: x,y,w,h a line, a line a frame (a sequence folder's "
+                        "or bag's own is used without it)")
+    p.add_argument("--out", default=DEFAULT_OUT,
+                   help="folder of the outputs, named after the source (default: %(default)s; files of the "
+                        "same name are replaced)")
+    p.add_argument("--no-video", action="store_true", help="leave the annotated video out")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_track)
