@@ -32,7 +32,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from msg_adapters.debug_image import COLOURS, debug_picture, to_bgr8
 from swir_tracker_ros.errors import HarnessError, SwirTrackerError
 from swir_tracker_ros.harness.bagio import FrameRecord
 from swir_tracker_ros.harness.evaluate import (
@@ -97,6 +96,8 @@ def select_box(image: np.ndarray, index: int) -> Box:
     why = gui_missing()
     if why:
         raise HarnessError(f"--select cannot open a window: {why}; give the box as --box x,y,w,h")
+    from msg_adapters.debug_image import to_bgr8
+
     title = f"harness track: draw the target's box on frame {index}, then Enter"
     x, y, w, h = cv2.selectROI(title, to_bgr8(image), showCrosshair=True, fromCenter=False)
     cv2.destroyWindow(title)
@@ -136,6 +137,8 @@ class Row:
 def annotate(image: np.ndarray, result: TrackResult | None, start: Box | None, index: int) -> np.ndarray:
     """The node's debug picture (box, search windows, state line) with the frame number; the start box in
     white on the start frame; while the target is gone (occluded or lost) the box crossed out and `GONE`."""
+    from msg_adapters.debug_image import COLOURS, debug_picture, to_bgr8  # sensor_msgs: `track` only
+
     if start is not None:
         img = to_bgr8(image)
         p0, p1 = (round(start.x), round(start.y)), (round(start.x + start.w), round(start.y + start.h))
@@ -194,6 +197,9 @@ class Outputs:
 
 
 def _rgb(state: TrackState) -> tuple[float, float, float]:
+    """The annotated video's colour of a state, for matplotlib."""
+    from msg_adapters.debug_image import COLOURS
+
     b, g, r = COLOURS[state]
     return (r / 255, g / 255, b / 255)
 
