@@ -258,7 +258,7 @@ class Session:
     gt: list[Box | None] = field(default_factory=list)
     occluded: list[bool | None] = field(default_factory=list)
     seconds: float = 0.0  # tracker time (init and updates)
-    wall: float = 0.0  # the whole loop: reading, tracking, writing
+    wall: float = 0.0  # after the start frame: reading, tracking and writing the frames
     start: Box | None = None
     start_index: int = -1
     size: tuple[int, int] = (0, 0)
@@ -325,7 +325,7 @@ def track_frames(frames: Iterator[FrameRecord], tracker: TrackerLike, box: Box |
     outputs open once the start is accepted; a KeyboardInterrupt or a bad frame after that ends the loop
     with what was tracked kept (`Session.interrupted`, `Session.error`)."""
     s = Session()
-    t_loop = time.perf_counter()
+    t_started = 0.0
     try:
         for fr in frames:
             s.gt.append(fr.gt)
@@ -337,6 +337,7 @@ def track_frames(frames: Iterator[FrameRecord], tracker: TrackerLike, box: Box |
                     s.states.append("idle")
                     continue
                 _start(s, tracker, fr, start_box, bits, open_outputs)
+                t_started = time.perf_counter()
             else:
                 _step(s, tracker, fr, bits)
             progress(len(s.pred))
@@ -348,7 +349,7 @@ def track_frames(frames: Iterator[FrameRecord], tracker: TrackerLike, box: Box |
         if s.outputs is None:
             raise
         s.error = str(exc)
-    s.wall = time.perf_counter() - t_loop
+    s.wall = time.perf_counter() - t_started
     progress.end()
     if s.outputs is None:
         n = len(s.pred)
@@ -438,7 +439,7 @@ def summary(rec: Recording, conf: str, s: Session, paths: list[Path], stats: Run
     if ms:
         lines.append(f"  speed        {len(ms) / max(sum(ms) / 1e3, 1e-9):.1f} fps tracker alone (mean "
                      f"{np.mean(ms):.1f} ms, max {max(ms):.1f} ms a frame); "
-                     f"{len(rows) / max(s.wall, 1e-9):.1f} fps with reading and writing")
+                     f"{len(ms) / max(s.wall, 1e-9):.1f} fps with reading and writing")
     if stats is not None:
         lines.append(f"  ground truth success AUC {stats.success_auc:.3f}, precision@20 "
                      f"{stats.precision_20:.3f} over {stats.frames} frames after the start (OTB OPE, as "
