@@ -22,7 +22,7 @@ from rosbags.rosbag2 import Writer
 from msg_adapters import bag as mb
 from msg_adapters.backend import ROSBAGS
 from msg_adapters.ground_truth import occluded_msg
-from swir_tracker_ros.harness import cli, track
+from swir_tracker_ros.harness import cli, track, track_outputs
 from swir_tracker_ros.harness.bagio import FrameRecord, write_bag
 from swir_tracker_ros.harness.evaluate import make_tracker_factory, run_starts
 from swir_tracker_ros.harness.recording import open_recording
@@ -204,7 +204,7 @@ def test_start_frame_and_outputs(forms, tmp_path, capsys) -> None:
     rc, rows, text, _ = run_track([str(forms["tiff16"]), "--box", gt_box(5), "--start", "5"], out, capsys)
     assert rc == 0 and [int(r["frame"]) for r in rows] == list(range(5, N))
     assert boxes(rows)[5] == read_gt(SEQ)[5].as_tuple()
-    assert list(rows[0]) == list(track.CSV_COLUMNS)
+    assert list(rows[0]) == list(track_outputs.CSV_COLUMNS)
     cap = cv2.VideoCapture(str(out / "tiff16.mp4"))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == N - 5
     cap.release()
@@ -310,7 +310,7 @@ def test_progress_bar_only_on_a_terminal(monkeypatch) -> None:
             return True
 
     for stream, shown in ((Tty(), True), (io.StringIO(), False)):
-        monkeypatch.setattr(track.sys, "stderr", stream)
-        bar = track.Progress(10, True)
+        monkeypatch.setattr(track_outputs.sys, "stderr", stream)
+        bar = track_outputs.Progress(10, True)
         bar(5, force=True)
         assert ("[###############---------------] 5/10 frames" in stream.getvalue()) is shown

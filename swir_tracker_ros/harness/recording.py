@@ -108,7 +108,9 @@ def folder_frames(path: Path) -> list[Path]:
     type; HarnessError for an empty folder, mixed kinds or mixed sizes (read from the file headers)."""
     files = sorted(f for f in path.iterdir() if f.is_file() and f.suffix.lower() in FOLDER_SUFFIXES)
     if not files:
-        raise HarnessError(f"{path}: no frames (PNG, TIFF or JPEG files) in the folder")
+        nested = any((d / "gt.txt").exists() for d in path.iterdir() if d.is_dir())
+        raise HarnessError(f"{path}: no frames (PNG, TIFF or JPEG files) in the folder"
+                           + ("; it holds sequence folders: give one of them" if nested else ""))
     kinds = sorted({_kind(f) for f in files})
     if len(kinds) > 1:
         raise HarnessError(f"{path}: the folder mixes {' and '.join(kinds)} frames; keep one kind")
