@@ -342,24 +342,27 @@ def add_track_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--select", action="store_true",
                    help="draw the start box on the start frame (needs a display and OpenCV with a GUI)")
     p.add_argument("--config", "--configuration", dest="configuration", default=DEFAULT,
-                   choices=(*configurations(), DEFAULT),
-                   help="our configuration (default: the tracker's default configuration)")
+                   choices=(*configurations(), DEFAULT), metavar="NAME",
+                   help=f"our configuration: {', '.join(configurations())} (default: the tracker's default, "
+                        f"{resolve_configuration(DEFAULT)})")
     p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
                    help="override a parameter of the configuration (as `harness eval --set`)")
     p.add_argument("--start", type=int, default=0, metavar="FRAME",
                    help="the frame (from 0) the box is on; earlier frames are skipped")
-    p.add_argument("--frames", type=int, default=None, help="only the first N frames of the recording")
+    p.add_argument("--frames", type=int, default=None, metavar="N",
+                   help="only the first N frames of the recording")
     p.add_argument("--bit-depth", type=int, choices=(8, 10, 12, 14, 16), default=None,
                    help="significant bits of 16-bit frames, as the node's bit_depth (default: what the "
                         "source says, else the full 16-bit container)")
     p.add_argument("--deinterlace", choices=("even", "odd"), default=None,
                    help="track one field of interlaced frames (conditioning.deinterlace)")
-    p.add_argument("--image-topic", default=None, help="a bag's image topic (default: /camera/image_raw, "
-                                                       "else its only sensor_msgs/Image topic)")
+    p.add_argument("--image-topic", default=None, metavar="TOPIC",
+                   help="a bag's image topic (default: /camera/image_raw, else its only sensor_msgs/Image "
+                        "topic)")
     p.add_argument("--gt", default=None, metavar="FILE",
                    help="ground truth to score against: x,y,w,h a line, a line a frame (a sequence folder's "
                         "or bag's own is used without it)")
-    p.add_argument("--out", default=DEFAULT_OUT,
+    p.add_argument("--out", default=DEFAULT_OUT, metavar="DIR",
                    help="folder of the outputs, named after the source (default: %(default)s; files of the "
                         "same name are replaced)")
     p.add_argument("--no-video", action="store_true", help="leave the annotated video out")
