@@ -173,25 +173,34 @@ def test_deinterlace_and_overrides_reach_the_tracker_as_in_eval(forms, tmp_path,
     assert deint != harness_play(forms["bag8"])  # the option changes what is tracked
 
 
-def test_bit_depth_is_given_to_the_core_for_16_bit_frames_only(forms, tmp_path, capsys, monkeypatch) -> None:
-    seen: list[int | None] = []
+def patch_tracker(monkeypatch, change) -> None:
+    """`harness track` builds its tracker, then `change(tracker)` (a spy, a fault) before it is used."""
     factory = track.make_tracker_factory
 
-    def spying(name, overrides=()):
+    def patched(name, overrides=()):
         make = factory(name, overrides)
 
         def build():
             trk = make()
-            init = trk.init
-
-            def spy(frame, box, bit_depth=None):
-                seen.append(bit_depth)
-                return init(frame, box, bit_depth)
-            trk.init = spy
+            change(trk)
             return trk
         return build
 
-    monkeypatch.setattr(track, "make_tracker_factory", spying)
+    monkeypatch.setattr(track, "make_tracker_factory", patched)
+
+
+def test_bit_depth_is_given_to_the_core_for_16_bit_frames_only(forms, tmp_path, capsys, monkeypatch) -> None:
+    seen: list[int | None] = []
+
+    def spy_on_init(trk) -> None:
+        init = trk.init
+
+        def spy(frame, box, bit_depth=None):
+            seen.append(bit_depth)
+            return init(frame, box, bit_depth)
+        trk.init = spy
+
+    patch_tracker(monkeypatch, spy_on_init)
     for spec in (forms["tiff16"], forms["tiff8"]):
         rc, *_ = run_track([str(spec), "--box", gt_box(), "--frames", "2", "--bit-depth", "12"],
                            tmp_path / spec.name, capsys)
@@ -276,25 +285,17 @@ def test_frame_of_another_size_stops_and_keeps_what_was_tracked(tmp_path, capsys
 
 
 def test_ctrl_c_stops_cleanly_and_writes_what_was_tracked(forms, tmp_path, capsys, monkeypatch) -> None:
-    factory = track.make_tracker_factory
+    def ctrl_c_on_the_7th_update(trk) -> None:
+        update, calls = trk.update, []
 
-    def interrupted(name, overrides=()):
-        make = factory(name, overrides)
+        def update_until_ctrl_c(frame, **kw):
+            calls.append(1)
+            if len(calls) == 7:
+                raise KeyboardInterrupt
+            return update(frame, **kw)
+        trk.update = update_until_ctrl_c
 
-        def build():
-            trk, calls = make(), []
-            update = trk.update
-
-            def update_until_ctrl_c(frame, **kw):
-                calls.append(1)
-                if len(calls) == 7:
-                    raise KeyboardInterrupt
-                return update(frame, **kw)
-            trk.update = update_until_ctrl_c
-            return trk
-        return build
-
-    monkeypatch.setattr(track, "make_tracker_factory", interrupted)
+    patch_tracker(monkeypatch, ctrl_c_on_the_7th_update)
     out = tmp_path / "o"
     rc, rows, text, _ = run_track([str(forms["tiff8"]), "--box", gt_box()], out, capsys)
     assert rc == 130 and len(rows) == 7 and "interrupted" in text  # the start frame and 6 updates
