@@ -242,11 +242,16 @@ def _bad(tmp: Path, forms: dict[str, Path]) -> dict[str, tuple[list[str], str]]:
     kinds = tmp / "kinds"
     shutil.copytree(forms["tiff8"], kinds)
     cv2.imwrite(str(kinds / "000099.png"), np.zeros((240, 360), np.uint8))
+    depths = tmp / "depths"
+    shutil.copytree(forms["tiff8"], depths)
+    cv2.imwrite(str(depths / "000004.tif"), np.zeros((240, 360), np.uint16))
     box = ["--box", gt_box()]
     return {
         "not a video": ([str(text), *box], r"notes\.mp4: not a video"),
         "empty folder": ([str(empty), *box], r"empty: no frames"),
         "mixed sizes": ([str(mixed), *box], r"mixed: frames of mixed sizes: 000003\.tif is 120x100"),
+        "mixed depths": ([str(depths), *box], r"depths: frames of mixed pixel types: 000004\.tif is 360x240 "
+                                               r"I;16"),
         "mixed kinds": ([str(kinds), *box], r"kinds: the folder mixes PNG and TIFF frames"),
         "box outside": ([str(forms["tiff8"]), "--box", "400,10,20,20"], r"lies outside the 360x240 image"),
         "box malformed": ([str(forms["tiff8"]), "--box", "1,2,3"], r"--box wants x,y,w,h"),

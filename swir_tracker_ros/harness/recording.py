@@ -128,8 +128,9 @@ def folder_frames(path: Path) -> list[Path]:
         elif fmt != first[1]:
             (w0, h0), m0 = first[1]
             (w, h), m = fmt
-            raise HarnessError(f"{path}: frames of mixed sizes: {f.name} is {w}x{h} {m}, {first[0].name} "
-                               f"{w0}x{h0} {m0}")
+            what = "sizes" if (w, h) != (w0, h0) else "pixel types"
+            raise HarnessError(f"{path}: frames of mixed {what}: {f.name} is {w}x{h} {m}, {first[0].name} "
+                               f"{w0}x{h0} {m0} (PIL modes); one size and type per folder")
     return files
 
 

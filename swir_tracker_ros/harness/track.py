@@ -164,6 +164,7 @@ def track_frames(frames: Iterator[FrameRecord], tracker: TrackerLike, box: Box |
     t_started = 0.0
     try:
         for fr in frames:
+            progress(len(s.pred))
             s.gt.append(fr.gt)
             s.occluded.append(fr.occluded)
             if s.outputs is None:
@@ -176,7 +177,6 @@ def track_frames(frames: Iterator[FrameRecord], tracker: TrackerLike, box: Box |
                 t_started = time.perf_counter()
             else:
                 _step(s, tracker, fr, bits)
-            progress(len(s.pred))
     except KeyboardInterrupt:
         s.interrupted = True
         if s.outputs is None:
