@@ -278,7 +278,7 @@ def test_bad_inputs_are_one_line_exit_2_and_write_nothing(forms, tmp_path, capsy
         assert not out.exists(), case
 
 
-def test_frame_of_another_size_stops_and_keeps_what_was_tracked(tmp_path, capsys) -> None:
+def test_frame_of_another_size_stops_and_keeps_what_was_tracked(forms, tmp_path, capsys) -> None:
     imgs = [read_frame(f) for f in frame_files(SEQ)[:6]]
     imgs[4] = cv2.resize(imgs[4], (180, 120))
     write_bag(tmp_path / "bag", (FrameRecord(T0_NS + k * 40_000_000, im, None) for k, im in enumerate(imgs)))
