@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The `harness` command: make-bag, synth, info, eval, compare, table, verdict, regress, replay
+"""The `harness` command: make-bag, synth, info, eval, compare, table, verdict, regress, replay, track
 (docs/harness.md)."""
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from swir_tracker_ros.harness.regress import REGRESSION_DIR
 from swir_tracker_ros.harness.runner import PROTOCOLS
 from swir_tracker_ros.harness.sources import SYNTH_PREFIX, Source, convert_bits, open_source
 from swir_tracker_ros.harness.tables import format_eval
+from swir_tracker_ros.harness.track import add_track_parser
 from swir_tracker_ros.harness.verdict import KEEP_SE, METRICS
 from swir_tracker_ros.scene import scenarios
 from swir_tracker_ros.scene.camera import CameraView
@@ -277,6 +278,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_replay)
 
     _regress_parser(sub)
+    add_track_parser(sub)
     return ap
 
 
