@@ -263,8 +263,8 @@ class NetworkLead:
         prediction, above the lower bars (a map made ambiguous by a look-alike beside the target, not a
         lost target): no other candidate may take the track then (the motion decides between look-alikes)."""
         g = self.verdict.p
-        return (off_path(det.smoothed, pred, size) <= self.p.resume_radius and c.psr >= g.psr_gone
-                and c.score >= g.score_gone)
+        return (self.missed < self.p.long_loss and off_path(det.smoothed, pred, size) <= self.p.resume_radius
+                and c.psr >= g.psr_gone and c.score >= g.score_gone)
 
     def _resumes(self, det: SiameseDetection, c: GoneCues, pred: Box, size: float) -> bool:
         """A candidate resumes the track: the appearance's resume bar, and a place the motion allows (or,
@@ -292,5 +292,8 @@ class NetworkLead:
                 reach = self._radius() * math.sqrt(b.w * b.h) + 0.5 * span
                 tiles = [(x, y) for x, y in tiles if math.hypot(x - pred.cx, y - pred.cy) <= reach]
             self._tiles = tiles
-        take, self._tiles = self._tiles[:self.p.tiles_per_frame - 1], self._tiles[self.p.tiles_per_frame - 1:]
-        return [self.net.search(image, cx, cy, b.w, b.h) for cx, cy in [(pred.cx, pred.cy), *take]]
+        n = self.p.tiles_per_frame - 1
+        again = [] if self._pending is None or n < 1 else [self._pending.center]  # to confirm: look again
+        k = n - len(again)
+        take, self._tiles = self._tiles[:k], self._tiles[k:]
+        return [self.net.search(image, cx, cy, b.w, b.h) for cx, cy in [(pred.cx, pred.cy), *again, *take]]
