@@ -45,7 +45,7 @@ def _params_objects(obj: object) -> list[object]:
 def test_the_papers_pipelines_and_the_default_are_named_configurations() -> None:
     assert set(PAPERS) | {"measured", "eco", "siamese", "fused", "lead"} == set(CONFIGURATIONS)
     assert TrackerParams() == configuration("measured")  # the dataclass defaults: the CF pipeline's layers
-    assert DEFAULT_CONFIGURATION == "lead" and configuration(DEFAULT_CONFIGURATION).lead is not None
+    assert configuration("lead").lead is not None and DEFAULT_CONFIGURATION in CONFIGURATIONS
     for name in CONFIGURATIONS:
         for base in (None, *BASES):
             if name == "lead" and base not in (None, "siamese"):  # the network leads, no other filter
