@@ -257,3 +257,10 @@ def test_the_pinned_model_finds_the_people_of_a_tud_campus_frame(model: Path, sh
     _, found = greedy_matches([d.box for d in dets], gt)
     assert len(found) >= len(gt) / 2, (len(found), len(gt))
     assert all(0.3 <= d.score <= 1.0 for d in dets)
+
+
+def test_a_file_onnxruntime_cannot_load_is_one_error(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(b"not a model")
+    with pytest.raises(AcquisitionError, match="detector yolox: .*bad.onnx"):
+        learned.YoloxDetector(model_path=str(bad))

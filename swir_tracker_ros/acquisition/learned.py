@@ -24,6 +24,7 @@ import numpy as np
 from swir_tracker_ros.acquisition.association import Detection
 from swir_tracker_ros.core.conditioning import ConditioningConfig, FrameConditioner
 from swir_tracker_ros.core.siamese.locator import locate
+from swir_tracker_ros.core.siamese.network import session
 from swir_tracker_ros.errors import AcquisitionError, ModelError
 from swir_tracker_ros.types import Box
 
@@ -119,17 +120,6 @@ def people(raw: np.ndarray, size: int, ratio: float, width: int, height: int, sc
     return out
 
 
-def session(path: str, threads: int):
-    """An onnxruntime CPU session of `path` with `threads` intra-op threads (one inter-op)."""
-    import onnxruntime as ort
-
-    opts = ort.SessionOptions()
-    opts.intra_op_num_threads = threads
-    opts.inter_op_num_threads = 1
-    opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-    return ort.InferenceSession(path, sess_options=opts, providers=["CPUExecutionProvider"])
-
-
 class YoloxDetector:
     """YOLOX-Nano persons in mono8 / mono16 frames (the `Detector` protocol). A 16-bit frame is made 8-bit
     by the project's conditioning (percentile stretch, core/conditioning.py); an 8-bit frame is used as is.
@@ -140,9 +130,9 @@ class YoloxDetector:
         if model_path is None:
             model_path = str(locate_model(self.params.model_dir))
         try:
-            self.session = session(model_path, self.params.threads)
-        except Exception as exc:  # onnxruntime raises its own types for an unreadable graph
-            raise AcquisitionError(f"detector model {model_path} cannot be loaded: {exc}") from None
+            self.session = session(Path(model_path), self.params.threads)
+        except ModelError as exc:
+            raise AcquisitionError(f"detector yolox: {exc}") from None
         inp = self.session.get_inputs()[0]
         self.input_name = inp.name
         shape = inp.shape
