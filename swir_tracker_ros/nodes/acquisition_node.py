@@ -165,7 +165,7 @@ class AcquisitionNode(Node):
             self.pub_candidates.publish(tracks_to_markers(candidates, hdr, CANDIDATES_NS))
         if self.params.auto_handoff and not self.awaiting_tracker and self.tracker_state in (
                 TrackState.IDLE, TrackState.LOST):
-            box = self.auto.step([d.box for d in dets])
+            box = self.auto.step([d.box for d in dets], shift)
             if box is not None:
                 self._hand_off(self._track_at(box), box)
         if self.params.publish_debug and self.pub_debug.get_subscription_count() > 0:
