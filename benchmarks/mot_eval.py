@@ -480,8 +480,8 @@ def dev_mot(seqs: list[DevSeq], cache: Path | None, detector: str, variants: dic
         replay = Replay.of(dets)
         for name, params in variants.items():
             replay.reset()
-            out.setdefault(name, {})[q.name] = evaluate(tud_frames(q.path), replay,
-                                                        MultiTargetTracker(params, siamese))
+            trk = MultiTargetTracker(replace(params, frame_rate=q.fps), siamese)
+            out.setdefault(name, {})[q.name] = evaluate(tud_frames(q.path), replay, trk)
         if peers:
             for name, r in run_peers(gts, dets, q.fps).items():
                 out.setdefault(name, {})[q.name] = r
