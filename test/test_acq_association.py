@@ -235,3 +235,9 @@ def test_weak_detections_continue_tracks_but_start_none() -> None:
         trk.step(_frame_with([box]), [Detection(box, 0.9)])
     out = trk.step(_frame_with([box]), [Detection(box, 0.3)])
     assert [t.id for t in out] == [1] and len(trk.tracks) == 1
+
+
+def test_confirm_hits_0_shows_a_track_from_its_first_detection() -> None:
+    trk = _tracker(confirm_hits=0)
+    box = Box(100, 80, 30, 80)
+    assert [t.id for t in trk.step(_frame_with([box]), [Detection(box)])] == [1]

@@ -76,7 +76,7 @@ class MotParams:
                               "again: a change of size that lasts is the target's (5 hits, as confirm_hits)",
                               1, 1000)
     confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits (paper 004: 5; "
-                            "SORT's min_hits: 3)", 0, 100)
+                            "SORT's min_hits: 3); 0 = confirmed at birth", 0, 100)
     frame_rate: float = _f(25.0, "rate (Hz) at which detections arrive (camera rate / detect_every); the "
                            f"three miss counts below are frames at {RATE_REF:g} Hz and are scaled by "
                            f"frame_rate / {RATE_REF:g} (at least 1), as the peers scale their lost-track "
@@ -306,6 +306,7 @@ class MultiTargetTracker:
         _, _, _, R = self._noise(d.box.h)
         P0 = initial_covariance(d.box, p.r_pos_rel * d.box.h, p.r_size_rel * d.box.h, p.v0_rel * d.box.h)
         hist: deque = deque(maxlen=p.history_len)
-        self.tracks.append(Track(self.next_id, state_from_box(d.box), P0, R, d.appearance, hist,
+        status = TrackStatus.CONFIRMED if p.confirm_hits == 0 else TrackStatus.TENTATIVE  # 0 further hits
+        self.tracks.append(Track(self.next_id, state_from_box(d.box), P0, R, d.appearance, hist, status,
                                  last_box=d.box, output_detection=p.output_detection))
         self.next_id += 1
