@@ -469,6 +469,15 @@ def dev_detection_table(seqs: list[DevSeq], cache: Path | None, detectors: Itera
     return "\n".join(lines) + "\n"
 
 
+def learned_mot_params() -> MotParams:
+    """MotParams with the mot section of params/acquisition_learned.yaml (the association decided for the
+    learned detector's boxes); frame_rate is set per sequence by `dev_mot`."""
+    import yaml
+
+    doc = yaml.safe_load((REPO / "params" / "acquisition_learned.yaml").read_text())
+    return replace(MotParams(), **doc["/**"]["ros__parameters"]["mot"])
+
+
 def dev_mot(seqs: list[DevSeq], cache: Path | None, detector: str, variants: dict[str, MotParams],
             siamese: SiameseFamily, peers: bool = True) -> dict[str, dict[str, Result]]:
     """{row: {sequence: Result}}: each variant of our association and every peer configuration on the
@@ -575,7 +584,8 @@ def main(argv: list[str] | None = None) -> int:
     if "dev-mot" in only:
         seqs = dev_sequences()
         for name in dev_dets:
-            res = dev_mot(seqs, cache, name, {"ours (defaults)": MotParams()}, siamese)
+            rows = {"ours (defaults)": MotParams(), "ours (acquisition_learned.yaml)": learned_mot_params()}
+            res = dev_mot(seqs, cache, name, rows, siamese)
             print(dev_mot_table(f"Development MOT data, the {name} detector's own boxes", res, seqs))
     print(f"total {time.time() - t0:.0f} s")
     return 0
