@@ -262,5 +262,5 @@ def test_the_pinned_model_finds_the_people_of_a_tud_campus_frame(model: Path, sh
 def test_a_file_onnxruntime_cannot_load_is_one_error(tmp_path: Path) -> None:
     bad = tmp_path / "bad.onnx"
     bad.write_bytes(b"not a model")
-    with pytest.raises(AcquisitionError, match="detector yolox: .*bad.onnx"):
+    with pytest.raises(AcquisitionError, match=r"detector yolox: .*bad\.onnx"):
         learned.YoloxDetector(model_path=str(bad))
