@@ -264,3 +264,29 @@ def test_a_file_onnxruntime_cannot_load_is_one_error(tmp_path: Path) -> None:
     bad.write_bytes(b"not a model")
     with pytest.raises(AcquisitionError, match=r"detector yolox: .*bad\.onnx"):
         learned.YoloxDetector(model_path=str(bad))
+
+
+def test_auto_initialisation_picks_up_a_person_under_a_panning_head(model: Path, shared_dir: Path) -> None:
+    """TUD-Campus seen through a 300x300 window that pans 40 px a frame to the right (the scene moves left):
+    given the head's image shift, the learned detector's boxes confirm a person after five updates and the
+    box handed off covers an annotated person; without the shift no temporary track follows anyone."""
+    from swir_tracker_ros.acquisition.handoff import AutoInitialiser
+
+    seq = shared_dir / "data" / "mot" / "tud_campus"
+    rows = np.loadtxt(seq / "gt.txt", delimiter=",", ndmin=2)
+    det, step = learned.YoloxDetector(), 40
+    views = []
+    for k in range(8):
+        g = cv2.imread(str(seq / f"{k + 1:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        views.append([d.box for d in det.detect(g[100:400, step * k:step * k + 300])])
+    for compensate in (True, False):
+        auto = AutoInitialiser()
+        shift = (-float(step), 0.0) if compensate else (0.0, 0.0)
+        out = [auto.step(b, shift if k else (0.0, 0.0)) for k, b in enumerate(views)]
+        first = next((k for k, b in enumerate(out) if b is not None), None)
+        if not compensate:
+            assert first is None
+            continue
+        assert first == 5
+        gt = [Box(r[2] - 1.0 - step * first, r[3] - 101.0, r[4], r[5]) for r in rows[rows[:, 0] == first + 1]]
+        assert max(out[first].iou(b) for b in gt) >= 0.5
