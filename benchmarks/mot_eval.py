@@ -84,6 +84,8 @@ class Result:
     assoc_ms: float
     frames: int
     causes: dict[str, int] = field(default_factory=dict)  # false output boxes by cause (CAUSES)
+    hyps: list[list[tuple[int, Box]]] = field(default_factory=list, repr=False)  # output per frame (HOTA)
+    hota: float = float("nan")  # set by `add_hota` (the peer venv's TrackEval-matching HOTA)
 
 
 # Why an output box is a false positive (motmetrics FP event), checked in this order:
@@ -163,7 +165,26 @@ def score(gts: list[list[tuple[int, Box]]], hyps: list[list[Hyp]], times_s: list
     causes = fp_causes(acc, gts, hyps)
     return Result(float(row["mota"]), motp, float(row["idf1"]), int(row["num_switches"]),
                   float(row["recall"]), float(row["precision"]),
-                  1000.0 * float(np.mean(times_s)) if times_s else 0.0, len(gts), causes)
+                  1000.0 * float(np.mean(times_s)) if times_s else 0.0, len(gts), causes,
+                  [[(i, b) for i, b, _ in fr] for fr in hyps])
+
+
+def add_hota(gts: list[list[tuple[int, Box]]], results: dict[str, Result]) -> None:
+    """Set each result's HOTA (benchmarks/mot_peers.py --hota in the peer venv; left NaN without it)."""
+    if not PEER_PY.exists():
+        return
+
+    def rows(frames: list[list[tuple[int, Box]]]) -> list[list[float]]:
+        return [[f + 1, i, *b.as_tuple()] for f, fr in enumerate(frames) for i, b in fr]
+
+    job = {"gt": rows(gts), "runs": {k: rows(r.hyps) for k, r in results.items()}}
+    with tempfile.TemporaryDirectory() as tmp:
+        src, dst = Path(tmp) / "in.json", Path(tmp) / "out.json"
+        src.write_text(json.dumps(job))
+        script = str(REPO / "benchmarks" / "mot_peers.py")
+        subprocess.run([str(PEER_PY), script, "--hota", str(src), str(dst)], check=True)
+        for k, v in json.loads(dst.read_text()).items():
+            results[k].hota = v
 
 
 def fp_causes(acc: mm.MOTAccumulator, gts: list[list[tuple[int, Box]]],
@@ -494,6 +515,7 @@ def dev_mot(seqs: list[DevSeq], cache: Path | None, detector: str, variants: dic
         if peers:
             for name, r in run_peers(gts, dets, q.fps).items():
                 out.setdefault(name, {})[q.name] = r
+        add_hota(gts, {k: v[q.name] for k, v in out.items()})
     return out
 
 
@@ -502,6 +524,7 @@ def dev_mot_table(title: str, res: dict[str, dict[str, Result]], seqs: list[DevS
     best by the mean over videos (MOTA, then IDF1) chosen on this table."""
     mean = {k: (video_mean({q: r.mota for q, r in v.items()}, seqs),
                 video_mean({q: r.idf1 for q, r in v.items()}, seqs)) for k, v in res.items()}
+    hota = {k: video_mean({q: r.hota for q, r in v.items()}, seqs) for k, v in res.items()}
     rows = [k for k in res if not k.startswith(("SORT", "ByteTrack", "OC-SORT"))]
     for peer in ("SORT", "ByteTrack", "OC-SORT"):
         grid = [k for k in res if k == peer or k.startswith(peer + " ")]
@@ -510,10 +533,11 @@ def dev_mot_table(title: str, res: dict[str, dict[str, Result]], seqs: list[DevS
             best = max(grid, key=lambda k: mean[k])
             if best != peer:
                 rows.append(best)
-    lines = [f"### {title}", "", "MOTA / IDF1 / ID switches per sequence; mean over videos (windows of one "
-             "video averaged first).", "",
-             "| | " + " | ".join(q.name for q in seqs) + " | MOTA | IDF1 |",
-             "|---|" + "---|" * (len(seqs) + 2)]
+    lines = [f"### {title}", "", "MOTA / IDF1 / ID switches per sequence; MOTA, IDF1 and HOTA "
+             "(`trackers.eval`, TrackEval's matching) as means over videos (windows of one video averaged "
+             "first).", "",
+             "| | " + " | ".join(q.name for q in seqs) + " | MOTA | IDF1 | HOTA |",
+             "|---|" + "---|" * (len(seqs) + 3)]
     for k in rows:
         label = f"{k} (defaults)" if k in ("SORT", "ByteTrack", "OC-SORT") else k
         if k.startswith(("SORT ", "ByteTrack ", "OC-SORT ")):
@@ -521,7 +545,7 @@ def dev_mot_table(title: str, res: dict[str, dict[str, Result]], seqs: list[DevS
         cells = [f"{100 * r.mota:.1f} / {100 * r.idf1:.1f} / {r.idsw}"
                  for r in (res[k][q.name] for q in seqs)]
         lines.append(f"| {label} | " + " | ".join(cells)
-                     + f" | {100 * mean[k][0]:.1f} | {100 * mean[k][1]:.1f} |")
+                     + f" | {100 * mean[k][0]:.1f} | {100 * mean[k][1]:.1f} | {100 * hota[k]:.1f} |")
     return "\n".join(lines) + "\n"
 
 
