@@ -290,3 +290,31 @@ def test_auto_initialisation_picks_up_a_person_under_a_panning_head(model: Path,
         assert first == 5
         gt = [Box(r[2] - 1.0 - step * first, r[3] - 101.0, r[4], r[5]) for r in rows[rows[:, 0] == first + 1]]
         assert max(out[first].iou(b) for b in gt) >= 0.5
+
+
+def test_the_node_runs_the_learned_detector_on_a_mono16_image(model: Path, shared_dir: Path, context) -> None:
+    """detector yolox in the node: a 16-bit frame (TUD-Campus frame 1 x 64) goes through the detector and the
+    association; people are found and the detector is the learned one."""
+    from rclpy.parameter import Parameter
+
+    from msg_adapters.image import numpy_to_image
+    from msg_adapters.stamps import header
+    from swir_tracker_ros.nodes.acquisition_node import AcquisitionNode
+
+    g = cv2.imread(str(shared_dir / "data" / "mot" / "tud_campus" / "000001.png"), cv2.IMREAD_GRAYSCALE)
+    node = AcquisitionNode(context=context, parameter_overrides=[Parameter("detector", value="yolox")])
+    seen: list[int] = []
+    try:
+        assert isinstance(node.detector, learned.YoloxDetector)
+        detect = node.detector.detect
+
+        def counted(frame: np.ndarray, shift: tuple[float, float] = (0.0, 0.0)) -> list:
+            out = detect(frame, shift)
+            seen.append(len(out))
+            return out
+
+        node.detector.detect = counted
+        node._on_image(numpy_to_image(g.astype(np.uint16) * 64, header(1.0, "swir")))
+        assert seen and seen[0] >= 3
+    finally:
+        node.destroy_node()
