@@ -10,12 +10,21 @@ Columns: MOTA, MOTP (mean IoU of matches), IDF1, ID switches, and Table 6's "pre
 conventional recall) and "recall" (matched / output, the conventional precision); per-frame association time.
 tud-det-sweep re-runs the base and paper rows on TUD det.txt over a 3x3 neighbourhood of (r_pos_rel,
 gate_chi2) and prints mean, sd and range: how much one setting's score on that short sequence is chance.
+
+The development MOT data (issue 49): TUD-Campus and the windows of the built mot_corpus ($MOT_CORPUS, default
+../mot_corpus; ../shared/mot_corpus/README.md), each detector's own boxes (learned YOLOX-Nano, HOG,
+motion), cached under --det-cache:
+
+    .venv/bin/python benchmarks/mot_eval.py --only dev-detection,dev-mot --det-cache out/dets
+dev-detection: precision / recall of each detector at IoU 0.5 (greedy per frame); dev-mot: our association
+and SORT / ByteTrack / OC-SORT on the same boxes, per sequence and averaged per video.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -34,10 +43,13 @@ sys.path.insert(0, str(REPO))
 from swir_tracker_ros.acquisition.association import Detection  # noqa: E402
 from swir_tracker_ros.acquisition.detectors import (  # noqa: E402
     Detector,
+    HogParams,
     HogPeopleDetector,
     MotDetFile,
     MotionDetector,
+    greedy_matches,
 )
+from swir_tracker_ros.acquisition.learned import YoloxDetector, model_problem  # noqa: E402
 from swir_tracker_ros.acquisition.mot import MotParams, MultiTargetTracker, TrackStatus  # noqa: E402
 from swir_tracker_ros.acquisition.siamese import SiameseFamily  # noqa: E402
 from swir_tracker_ros.scene import crowd  # noqa: E402
@@ -52,8 +64,10 @@ ABLATION = {
     "+ both (paper 004)": {"use_edge": True, "use_siamese": True},
 }
 
-FAMILIES = ("tud-det", "tud-det-sweep", "tud-motion", "tud-hog", "crossings", "meetings", "crowds",
-            "motion-crowds")
+DEFAULT_FAMILIES = ("tud-det", "tud-det-sweep", "tud-motion", "tud-hog", "crossings", "meetings", "crowds",
+                    "motion-crowds")
+FAMILIES = (*DEFAULT_FAMILIES, "dev-detection", "dev-mot")  # the dev tables on request (--only)
+CORPUS = Path(os.environ.get("MOT_CORPUS", REPO.parent / "mot_corpus"))
 # Neighbourhood of the defaults for the TUD det.txt sensitivity table: (r_pos_rel, gate_chi2).
 SWEEP = [(r, g) for r in (0.075, 0.08, 0.085) for g in (9.0, 9.21, 9.5)]
 
@@ -71,6 +85,8 @@ class Result:
     assoc_ms: float
     frames: int
     causes: dict[str, int] = field(default_factory=dict)  # false output boxes by cause (CAUSES)
+    hyps: list[list[tuple[int, Box]]] = field(default_factory=list, repr=False)  # output per frame (HOTA)
+    hota: float = float("nan")  # set by `add_hota` (the peer venv's TrackEval-matching HOTA)
 
 
 # Why an output box is a false positive (motmetrics FP event), checked in this order:
@@ -94,11 +110,13 @@ Hyp = tuple[int, Box, HypInfo]
 
 
 def tud_frames(seq: Path = TUD) -> Iterator[Frame]:
-    """TUD-Campus frames (gray) with their ground truth (MOT 1-based boxes made 0-based)."""
+    """The frames (gray) of a MOT sequence folder (TUD-Campus by default; 000001.png or .jpg ...) with their
+    ground truth (MOT 1-based boxes made 0-based)."""
     rows = np.loadtxt(seq / "gt.txt", delimiter=",", ndmin=2)
-    n = int(rows[:, 0].max())
+    ext = ".png" if (seq / "000001.png").is_file() else ".jpg"
+    n = len(list(seq.glob(f"[0-9]*{ext}")))
     for f in range(1, n + 1):
-        img = cv2.imread(str(seq / f"{f:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        img = cv2.imread(str(seq / f"{f:06d}{ext}"), cv2.IMREAD_GRAYSCALE)
         gt = [(int(r[1]), Box(r[2] - 1.0, r[3] - 1.0, r[4], r[5])) for r in rows[rows[:, 0] == f]]
         yield img, gt
 
@@ -148,7 +166,26 @@ def score(gts: list[list[tuple[int, Box]]], hyps: list[list[Hyp]], times_s: list
     causes = fp_causes(acc, gts, hyps)
     return Result(float(row["mota"]), motp, float(row["idf1"]), int(row["num_switches"]),
                   float(row["recall"]), float(row["precision"]),
-                  1000.0 * float(np.mean(times_s)) if times_s else 0.0, len(gts), causes)
+                  1000.0 * float(np.mean(times_s)) if times_s else 0.0, len(gts), causes,
+                  [[(i, b) for i, b, _ in fr] for fr in hyps])
+
+
+def add_hota(gts: list[list[tuple[int, Box]]], results: dict[str, Result]) -> None:
+    """Set each result's HOTA (benchmarks/mot_peers.py --hota in the peer venv; left NaN without it)."""
+    if not PEER_PY.exists():
+        return
+
+    def rows(frames: list[list[tuple[int, Box]]]) -> list[list[float]]:
+        return [[f + 1, i, *b.as_tuple()] for f, fr in enumerate(frames) for i, b in fr]
+
+    job = {"gt": rows(gts), "runs": {k: rows(r.hyps) for k, r in results.items()}}
+    with tempfile.TemporaryDirectory() as tmp:
+        src, dst = Path(tmp) / "in.json", Path(tmp) / "out.json"
+        src.write_text(json.dumps(job))
+        script = str(REPO / "benchmarks" / "mot_peers.py")
+        subprocess.run([str(PEER_PY), script, "--hota", str(src), str(dst)], check=True)
+        for k, v in json.loads(dst.read_text()).items():
+            results[k].hota = v
 
 
 def fp_causes(acc: mm.MOTAccumulator, gts: list[list[tuple[int, Box]]],
@@ -213,6 +250,13 @@ class Replay:
         self.dets = [detector.detect(img) for img, _ in frames]
         self.k = 0
 
+    @classmethod
+    def of(cls, dets: list[list[Detection]]) -> Replay:
+        """A replay of detections already computed."""
+        out = cls([], MotionDetector())
+        out.dets = dets
+        return out
+
     def reset(self) -> None:
         self.k = 0
 
@@ -221,7 +265,7 @@ class Replay:
         return self.dets[self.k - 1]
 
 
-PEER_PY = REPO / ".venv-mot" / "bin" / "python"
+PEER_PY = Path(os.environ.get("MOT_PEER_PYTHON", REPO / ".venv-mot" / "bin" / "python"))
 FRAME_RATE = 25.0  # TUD-Campus (MOT15) frame rate; the peers scale their lost-track buffers by it
 
 
@@ -246,12 +290,13 @@ def peer_configs() -> list[dict]:
     return cfgs
 
 
-def run_peers(gts: list[list[tuple[int, Box]]], dets: list[list[Detection]]) -> dict[str, Result]:
+def run_peers(gts: list[list[tuple[int, Box]]], dets: list[list[Detection]],
+              frame_rate: float = FRAME_RATE) -> dict[str, Result]:
     """Every peer configuration on the same detections (subprocess in the peer venv), scored by `score`."""
     if not PEER_PY.exists():
         print(f"# peers skipped: {PEER_PY} missing (make mot-venv)", file=sys.stderr)
         return {}
-    job = {"frame_rate": FRAME_RATE, "configs": peer_configs(),
+    job = {"frame_rate": frame_rate, "configs": peer_configs(),
            "frames": [[[d.box.x, d.box.y, d.box.w, d.box.h, d.score] for d in fd] for fd in dets]}
     with tempfile.TemporaryDirectory() as tmp:
         src, dst = Path(tmp) / "in.json", Path(tmp) / "out.json"
@@ -359,13 +404,161 @@ def table(title: str, res: dict[str, Result]) -> str:
                          + f" | {sum(r.causes.values())} |")
     return "\n".join(lines) + "\n"
 
+@dataclass(frozen=True)
+class DevSeq:
+    """One sequence of the development MOT data."""
+
+    name: str
+    video: str  # windows of one video are averaged before videos are compared
+    path: Path
+    fps: float
+
+
+def dev_sequences() -> list[DevSeq]:
+    """TUD-Campus and every built window of the mot_corpus (CORPUS; missing: TUD-Campus alone)."""
+    out = [DevSeq("tud_campus", "TUD-Campus", TUD, FRAME_RATE)]
+    for ini in sorted(CORPUS.glob("*/seqinfo.ini")):
+        info = dict(line.split("=", 1) for line in ini.read_text().splitlines() if "=" in line)
+        meta = json.loads((ini.parent / "meta.json").read_text())
+        out.append(DevSeq(ini.parent.name, str(meta.get("video", ini.parent.name)), ini.parent,
+                          float(info.get("frameRate", 25))))
+    if len(out) == 1:
+        print(f"# {CORPUS} has no built sequences (../shared/mot_corpus/README.md): TUD-Campus only",
+              file=sys.stderr)
+    return out
+
+
+DEV_DETECTORS: dict[str, Callable[[], Detector]] = {
+    "yolox": YoloxDetector, "hog": lambda: HogPeopleDetector(HogParams()), "motion": MotionDetector}
+
+
+def cached_detections(seq: DevSeq, name: str, cache: Path | None) -> tuple[list[list[Detection]], float]:
+    """The boxes of detector `name` on every frame of `seq` and its mean time per call (ms), from
+    cache/name/seq.json when there, else run (one thread) and stored there."""
+    f = cache / name / f"{seq.name}.json" if cache is not None else None
+    if f is not None and f.is_file():
+        d = json.loads(f.read_text())
+        return [[Detection(Box(*b[:4]), b[4]) for b in fr] for fr in d["frames"]], d["ms"]
+    det = DEV_DETECTORS[name]()
+    frames, times = [], []
+    for img, _ in tud_frames(seq.path):
+        t0 = time.perf_counter()
+        frames.append(det.detect(img))
+        times.append(time.perf_counter() - t0)
+    ms = 1000.0 * float(np.mean(times))
+    if f is not None:
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_text(json.dumps({"ms": ms, "frames": [[[*d.box.as_tuple(), d.score] for d in fr]
+                                                       for fr in frames]}))
+    return frames, ms
+
+
+def detection_pr(gts: list[list[tuple[int, Box]]], dets: list[list[Detection]],
+                 min_iou: float = 0.5) -> tuple[float, float, int, int]:
+    """(precision, recall, detections, ground-truth boxes) at IoU >= min_iou, greedy per frame."""
+    tp = nd = ng = 0
+    for gt, fr in zip(gts, dets, strict=True):
+        matched, _ = greedy_matches([d.box for d in fr], [b for _, b in gt], min_iou)
+        tp += len(matched)
+        nd += len(fr)
+        ng += len(gt)
+    return tp / max(nd, 1), tp / max(ng, 1), nd, ng
+
+
+def video_mean(per_seq: dict[str, float], seqs: list[DevSeq]) -> float:
+    """Mean over videos of the mean over each video's windows."""
+    by_video: dict[str, list[float]] = {}
+    for q in seqs:
+        by_video.setdefault(q.video, []).append(per_seq[q.name])
+    return float(np.mean([np.mean(v) for v in by_video.values()]))
+
+
+def dev_detection_table(seqs: list[DevSeq], cache: Path | None, detectors: Iterable[str]) -> str:
+    lines = ["### Detectors on the development MOT data: precision / recall at IoU 0.5", "",
+             "| detector | " + " | ".join(q.name for q in seqs)
+             + " | mean over videos (P / R) | ms per call |",
+             "|---|" + "---|" * (len(seqs) + 2)]
+    for name in detectors:
+        cells, ps, rs, ms = [], {}, {}, []
+        for q in seqs:
+            gts = [gt for _, gt in tud_frames(q.path)]
+            dets, t = cached_detections(q, name, cache)
+            ps[q.name], rs[q.name], _, _ = detection_pr(gts, dets)
+            ms.append(t)
+            cells.append(f"{100 * ps[q.name]:.1f} / {100 * rs[q.name]:.1f}")
+        lines.append(f"| {name} | " + " | ".join(cells) + f" | {100 * video_mean(ps, seqs):.1f} / "
+                     f"{100 * video_mean(rs, seqs):.1f} | {np.mean(ms):.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def learned_mot_params() -> MotParams:
+    """MotParams with the mot section of params/acquisition_learned.yaml (the association decided for the
+    learned detector's boxes); frame_rate is set per sequence by `dev_mot`."""
+    import yaml
+
+    doc = yaml.safe_load((REPO / "params" / "acquisition_learned.yaml").read_text())
+    return replace(MotParams(), **doc["/**"]["ros__parameters"]["mot"])
+
+
+def dev_mot(seqs: list[DevSeq], cache: Path | None, detector: str, variants: dict[str, MotParams],
+            siamese: SiameseFamily, peers: bool = True) -> dict[str, dict[str, Result]]:
+    """{row: {sequence: Result}}: each variant of our association and every peer configuration on the
+    detector's own boxes."""
+    out: dict[str, dict[str, Result]] = {}
+    for q in seqs:
+        gts = [gt for _, gt in tud_frames(q.path)]
+        dets, _ = cached_detections(q, detector, cache)
+        replay = Replay.of(dets)
+        for name, params in variants.items():
+            replay.reset()
+            trk = MultiTargetTracker(replace(params, frame_rate=q.fps), siamese)
+            out.setdefault(name, {})[q.name] = evaluate(tud_frames(q.path), replay, trk)
+        if peers:
+            for name, r in run_peers(gts, dets, q.fps).items():
+                out.setdefault(name, {})[q.name] = r
+        add_hota(gts, {k: v[q.name] for k, v in out.items()})
+    return out
+
+
+def dev_mot_table(title: str, res: dict[str, dict[str, Result]], seqs: list[DevSeq]) -> str:
+    """Per sequence MOTA / IDF1 / IDSW and the mean over videos; each peer's defaults and its grid setting
+    best by the mean over videos (MOTA, then IDF1) chosen on this table."""
+    mean = {k: (video_mean({q: r.mota for q, r in v.items()}, seqs),
+                video_mean({q: r.idf1 for q, r in v.items()}, seqs)) for k, v in res.items()}
+    hota = {k: video_mean({q: r.hota for q, r in v.items()}, seqs) for k, v in res.items()}
+    rows = [k for k in res if not k.startswith(("SORT", "ByteTrack", "OC-SORT"))]
+    for peer in ("SORT", "ByteTrack", "OC-SORT"):
+        grid = [k for k in res if k == peer or k.startswith(peer + " ")]
+        if grid:
+            rows.append(peer)
+            best = max(grid, key=lambda k: mean[k])
+            if best != peer:
+                rows.append(best)
+    lines = [f"### {title}", "", "MOTA / IDF1 / ID switches per sequence; MOTA, IDF1 and HOTA "
+             "(`trackers.eval`, TrackEval's matching) as means over videos (windows of one video averaged "
+             "first).", "",
+             "| | " + " | ".join(q.name for q in seqs) + " | MOTA | IDF1 | HOTA |",
+             "|---|" + "---|" * (len(seqs) + 3)]
+    for k in rows:
+        label = f"{k} (defaults)" if k in ("SORT", "ByteTrack", "OC-SORT") else k
+        if k.startswith(("SORT ", "ByteTrack ", "OC-SORT ")):
+            label = f"{k} (best of grid)"
+        cells = [f"{100 * r.mota:.1f} / {100 * r.idf1:.1f} / {r.idsw}"
+                 for r in (res[k][q.name] for q in seqs)]
+        lines.append(f"| {label} | " + " | ".join(cells)
+                     + f" | {100 * mean[k][0]:.1f} | {100 * mean[k][1]:.1f} | {100 * hota[k]:.1f} |")
+    return "\n".join(lines) + "\n"
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two synthetic scenes per family instead of five")
     ap.add_argument("--no-hog", action="store_true", help="skip HOG on TUD (about 1 s per frame)")
-    ap.add_argument("--only", default=",".join(FAMILIES),
-                    help=f"comma-separated tables to run (default all): {', '.join(FAMILIES)}")
+    ap.add_argument("--det-cache", default="", help="folder caching each detector's boxes per development "
+                    "sequence (dev-detection, dev-mot)")
+    ap.add_argument("--dev-detectors", default="yolox,hog,motion", help="detectors of the dev tables")
+    ap.add_argument("--only", default=",".join(DEFAULT_FAMILIES),
+                    help=f"comma-separated tables to run (default all but dev-*): {', '.join(FAMILIES)}")
     args = ap.parse_args(argv)
     only = {f.strip() for f in args.only.split(",") if f.strip()}
     unknown = only - set(FAMILIES)
@@ -373,6 +566,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"unknown --only {sorted(unknown)}; choose from {', '.join(FAMILIES)}")
     if args.no_hog:
         only.discard("tud-hog")
+    cache = Path(args.det_cache) if args.det_cache else None
     siamese = SiameseFamily.load_default()
     t0 = time.time()
     if "tud-det" in only:
@@ -409,6 +603,22 @@ def main(argv: list[str] | None = None) -> int:
                             siamese) for s in seeds]
         print(table(f"Synthetic thermal crowds ({len(mcrowds)} scenes), our motion detector",
                     pooled(mcrowds)))
+    dev_dets = [d.strip() for d in args.dev_detectors.split(",") if d.strip()]
+    unknown_dets = set(dev_dets) - set(DEV_DETECTORS)
+    if unknown_dets:
+        ap.error(f"unknown --dev-detectors {sorted(unknown_dets)}; choose from {', '.join(DEV_DETECTORS)}")
+    problem = model_problem() if "yolox" in dev_dets and only & {"dev-detection", "dev-mot"} else None
+    if problem is not None:
+        print(f"# yolox skipped: {problem}", file=sys.stderr)
+        dev_dets.remove("yolox")
+    if "dev-detection" in only:
+        print(dev_detection_table(dev_sequences(), cache, dev_dets))
+    if "dev-mot" in only:
+        seqs = dev_sequences()
+        for name in dev_dets:
+            rows = {"ours (defaults)": MotParams(), "ours (acquisition_learned.yaml)": learned_mot_params()}
+            res = dev_mot(seqs, cache, name, rows, siamese)
+            print(dev_mot_table(f"Development MOT data, the {name} detector's own boxes", res, seqs))
     print(f"total {time.time() - t0:.0f} s")
     return 0
 

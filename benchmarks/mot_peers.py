@@ -11,13 +11,22 @@ IN.json: {"frame_rate": fps, "frames": [[[x, y, w, h, score], ...] per frame], "
 "tracker": "sort" | "bytetrack" | "ocsort", "kwargs": {...}}]}; scores in [0, 1].
 OUT.json: {name: [[[id, x, y, w, h], ...] per frame]}: the confirmed tracks of each frame (tracker_id >= 0),
 with the boxes the peers output (the matched detections). Nothing here imports the project.
+
+    .venv-mot/bin/python benchmarks/mot_peers.py --hota IN.json OUT.json
+
+HOTA (Luiten et al., IJCV 2021) of tracking outputs by `trackers.eval` (TrackEval's matching): IN.json
+{"gt": [[frame, id, x, y, w, h], ...], "runs": {name: [[frame, id, x, y, w, h], ...]}}; OUT.json {name: HOTA
+in [0, 1]} (0 for a run without boxes). Rows are written as MOT17 lines (conf 1, class 1 pedestrian,
+visibility 1): `trackers.eval` drops other classes.
 """
 
 from __future__ import annotations
 
 import json
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import supervision as sv
@@ -47,7 +56,34 @@ def run(frames: list[list[list[float]]], tracker: str, kwargs: dict, frame_rate:
     return {"tracks": out, "ms": 1000.0 * float(np.mean(times)) if times else 0.0}
 
 
+def hota(gt: list[list[float]], runs: dict[str, list[list[float]]]) -> dict[str, float]:
+    """HOTA of every run against the ground truth (MOT files written to a temporary folder)."""
+    from trackers.eval import evaluate_mot_sequence
+
+    def write(path: Path, rows: list[list[float]]) -> None:
+        path.write_text("".join(f"{int(f)},{int(i)},{x:.3f},{y:.3f},{w:.3f},{h:.3f},1,1,1\n"
+                                for f, i, x, y, w, h in rows))
+
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        write(Path(tmp) / "gt.txt", gt)
+        for name, rows in runs.items():
+            if not rows:
+                out[name] = 0.0
+                continue
+            write(Path(tmp) / "run.txt", rows)
+            res = evaluate_mot_sequence(Path(tmp) / "gt.txt", Path(tmp) / "run.txt", metrics=["HOTA"])
+            out[name] = float(res.HOTA.HOTA)
+    return out
+
+
 def main(argv: list[str]) -> int:
+    if len(argv) == 3 and argv[0] == "--hota":
+        with open(argv[1]) as f:
+            job = json.load(f)
+        with open(argv[2], "w") as f:
+            json.dump(hota(job["gt"], job["runs"]), f)
+        return 0
     if len(argv) != 2:
         print(__doc__, file=sys.stderr)
         return 2

@@ -207,3 +207,37 @@ def test_a_partial_view_must_lie_inside_the_prediction() -> None:
     dets = trk.describe(_frame_with([box]), [Detection(upper_inside), Detection(upper_offset)])
     C = cost_matrix(trk.tracks, dets, trk.weights)
     assert C[0, 0] < FORBIDDEN and C[0, 1] == FORBIDDEN
+
+
+def test_miss_counts_are_frames_at_25_hz_scaled_to_the_frame_rate() -> None:
+    """At 1 Hz a confirmed track drifts after 1 miss (20 frames of 25 Hz = 0.8 s) and dies after 2; a
+    tentative track dies after its first miss; at 50 Hz the counts double."""
+    assert MotParams(frame_rate=50.0).frames(20) == 40 and MotParams(frame_rate=1.0).frames(15) == 1
+    trk = _tracker(frame_rate=1.0, confirm_hits=1)
+    box = Box(100, 80, 30, 80)
+    for _ in range(2):
+        trk.step(_frame_with([box]), [Detection(box)])
+    t = trk.tracks[0]
+    assert t.status is TrackStatus.CONFIRMED
+    trk.step(_frame_with([box.shifted(200, 0)]), [Detection(box.shifted(200, 0))])  # a new, tentative one
+    assert t.status is TrackStatus.DRIFTING and len(trk.tracks) == 2
+    trk.step(FRAME, [])
+    assert trk.tracks == []
+
+
+def test_weak_detections_continue_tracks_but_start_none() -> None:
+    """start_score: a detection scoring below it starts no track, yet continues a confirmed one (with
+    high_score, in the second stage)."""
+    trk = _tracker(start_score=0.7, high_score=0.6, confirm_hits=1)
+    box = Box(100, 80, 30, 80)
+    assert trk.step(_frame_with([box]), [Detection(box, 0.65)]) == [] and trk.tracks == []
+    for _ in range(2):
+        trk.step(_frame_with([box]), [Detection(box, 0.9)])
+    out = trk.step(_frame_with([box]), [Detection(box, 0.3)])
+    assert [t.id for t in out] == [1] and len(trk.tracks) == 1
+
+
+def test_confirm_hits_0_shows_a_track_from_its_first_detection() -> None:
+    trk = _tracker(confirm_hits=0)
+    box = Box(100, 80, 30, 80)
+    assert [t.id for t in trk.step(_frame_with([box]), [Detection(box)])] == [1]

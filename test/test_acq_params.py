@@ -48,3 +48,15 @@ def test_node_takes_compressed_images_and_camera_info_beside_them(context) -> No
         assert abs(dx - 900.0 * 0.010000333) < 1e-3
     finally:
         node.destroy_node()
+
+
+def test_the_learned_detector_file_sets_known_parameters_to_valid_values() -> None:
+    """params/acquisition_learned.yaml: only fields of AcquisitionParams / MotParams, valid together, the
+    learned detector."""
+    doc = yaml.safe_load((REPO / "params" / "acquisition_learned.yaml").read_text())
+    values = doc["/**"]["ros__parameters"]
+    mot = values.pop("mot")
+    acq = AcquisitionParams(**values)
+    assert acq.detector == "yolox"
+    validate_params(acq)
+    validate_params(MotParams(**mot))

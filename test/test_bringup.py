@@ -163,6 +163,9 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(monkeypatch: pyt
     acq = with_acq[2].kwargs["parameters"][1]
     assert (acq["pan_joint"], acq["joint_states_topic"], acq["camera_info_topic"]) == (
         "pan", "joint_states", "")
+    assert "detector" not in acq  # '' = the params file's
+    learned = launched_nodes(description, {"acquisition": "true", "acquisition_detector": "yolox"})
+    assert learned[-1].kwargs["parameters"][1]["detector"] == "yolox"
 
 
 def test_launch_arguments_users_expect(monkeypatch: pytest.MonkeyPatch) -> None:

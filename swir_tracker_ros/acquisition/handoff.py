@@ -69,13 +69,18 @@ class AutoInitialiser:
     def reset(self) -> None:
         self.candidates.clear()
 
-    def step(self, boxes: Sequence[Box]) -> Box | None:
+    def step(self, boxes: Sequence[Box], ego_shift: tuple[float, float] = (0.0, 0.0)) -> Box | None:
+        """One detection frame: predict every temporary track, shifted by the image shift the head's motion
+        caused since the last call (ego_shift, px, as `MultiTargetTracker.step`), update it with the box
+        it overlaps most, start one on every box left over; the confirmed box, or None."""
         p = self.params
         used: set[int] = set()
         confirmed: Box | None = None
         for c in self.candidates:
             F, Q, H, R = box_model(p.q_pos, p.q_size, p.r_rel * c.x[3], p.r_rel * c.x[3])
             c.x, c.P = predict(c.x, c.P, F, Q)
+            c.x[0] += ego_shift[0]
+            c.x[1] += ego_shift[1]
             c.frames += 1
             pred = box_from_state(c.x)
             ious = [(pred.iou(b), k) for k, b in enumerate(boxes) if k not in used]

@@ -29,6 +29,8 @@ from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 from swir_tracker_ros.types import Box
 
+RATE_REF = 25.0  # Hz of the life-cycle counts of MotParams (TUD-Campus, paper 004's sequences)
+
 
 @dataclass
 class MotParams:
@@ -56,6 +58,9 @@ class MotParams:
     high_score: float = _f(0.0, "two-stage assignment (ByteTrack): detections scoring below this only "
                            "continue confirmed tracks left over by the stronger ones and never start a "
                            "track; 0 = one stage", 0.0, 1.0)
+    start_score: float = _f(0.0, "a detection left over starts a track only when it scores at least this "
+                            "(ByteTrack's track activation threshold, 0.7 there); weaker ones only continue "
+                            "tracks", 0.0, 1.0)
     partial_ratio: float = _f(0.75, "a detection narrower or shorter than this fraction of the predicted "
                               "box, cut from one side and inside it, is partial (an occluder or the image "
                               "border hides the rest): gated and updated on its visible edges only, template "
@@ -71,7 +76,12 @@ class MotParams:
                               "again: a change of size that lasts is the target's (5 hits, as confirm_hits)",
                               1, 1000)
     confirm_hits: int = _f(5, "a tentative track is confirmed after this many further hits (paper 004: 5; "
-                            "SORT's min_hits: 3)", 0, 100)
+                            "SORT's min_hits: 3); 0 = confirmed at birth", 0, 100)
+    frame_rate: float = _f(25.0, "rate (Hz) at which detections arrive (camera rate / detect_every); the "
+                           f"three miss counts below are frames at {RATE_REF:g} Hz and are scaled by "
+                           f"frame_rate / {RATE_REF:g} (at least 1), as the peers scale their lost-track "
+                           "buffer",
+                           0.1, 1000.0)
     tentative_max_miss: int = _f(5, "a tentative track missed this many frames is deleted", 1, 100)
     history_threshold: int = _f(20, "a confirmed track missed this many frames becomes drifting", 1, 1000)
     drift_threshold: int = _f(15, "a drifting track missed this many more frames is deleted", 1, 1000)
@@ -93,6 +103,11 @@ class MotParams:
     def validate(self) -> None:
         """Raise `ParameterError` naming the first bad field (`paramfield.validate_params`)."""
         validate_params(self)
+
+    def frames(self, count: int) -> int:
+        """A miss count given in frames at RATE_REF Hz, in frames at frame_rate (at least 1): a track is
+        kept for the same time whatever the rate (at 1 Hz, 20 frames of 25 Hz are 1 frame, not 20 s)."""
+        return max(1, round(count * self.frame_rate / RATE_REF))
 
     def cost_weights(self) -> CostWeights:
         base = BaseWeights(self.w_lbp, self.w_mean, self.w_std, self.w_height, self.w_width, self.w_score,
@@ -218,7 +233,8 @@ class MultiTargetTracker:
         for i in unmatched_tracks:
             self._miss(self.tracks[i])
         for j in unmatched_dets:
-            self._spawn(described[j])
+            if described[j].score >= p.start_score:
+                self._spawn(described[j])
         self.tracks = [t for t in self.tracks if t.status is not None and not self._dead(t)]
         for t in self.tracks:
             t.history.append((float(t.x[0]), float(t.x[1])))
@@ -273,15 +289,15 @@ class MultiTargetTracker:
         p = self.params
         t.misses += 1
         t.partial_run = 0  # a run of partial views is consecutive frames
-        if t.status is TrackStatus.CONFIRMED and t.misses >= p.history_threshold:
+        if t.status is TrackStatus.CONFIRMED and t.misses >= p.frames(p.history_threshold):
             t.status = TrackStatus.DRIFTING
 
     def _dead(self, t: Track) -> bool:
         p = self.params
         if t.status is TrackStatus.TENTATIVE:
-            return t.misses >= p.tentative_max_miss
+            return t.misses >= p.frames(p.tentative_max_miss)
         if t.status is TrackStatus.DRIFTING:
-            return t.misses >= p.history_threshold + p.drift_threshold
+            return t.misses >= p.frames(p.history_threshold) + p.frames(p.drift_threshold)
         return False
 
     def _spawn(self, d: Detection) -> None:
@@ -290,6 +306,7 @@ class MultiTargetTracker:
         _, _, _, R = self._noise(d.box.h)
         P0 = initial_covariance(d.box, p.r_pos_rel * d.box.h, p.r_size_rel * d.box.h, p.v0_rel * d.box.h)
         hist: deque = deque(maxlen=p.history_len)
-        self.tracks.append(Track(self.next_id, state_from_box(d.box), P0, R, d.appearance, hist,
+        status = TrackStatus.CONFIRMED if p.confirm_hits == 0 else TrackStatus.TENTATIVE  # 0 further hits
+        self.tracks.append(Track(self.next_id, state_from_box(d.box), P0, R, d.appearance, hist, status,
                                  last_box=d.box, output_detection=p.output_detection))
         self.next_id += 1

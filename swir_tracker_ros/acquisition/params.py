@@ -14,12 +14,14 @@ from swir_tracker_ros.acquisition.detectors import (
     MotionParams,
 )
 from swir_tracker_ros.acquisition.handoff import AutoInitParams
+from swir_tracker_ros.acquisition.learned import YoloxDetector, YoloxParams, model_problem
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import param as _f
 from swir_tracker_ros.paramfield import validate_params
 
-DETECTORS = ("motion", "hog")
+DETECTORS = ("motion", "hog", "yolox")
 _M = MotionParams()  # the motion detector's defaults are written once, in MotionParams
+_Y = YoloxParams()  # ... and the learned detector's in YoloxParams
 
 
 @dataclass
@@ -40,8 +42,11 @@ class AcquisitionParams:
                         read_only=True)
     tilt_joint: str = _f("tilt", "name of the tilt joint in the joint states (bring-up's tilt_joint)",
                          read_only=True)
-    detector: str = _f("motion", "detector: motion (background subtraction) or hog (OpenCV people)",
-                       choices=DETECTORS)
+    detector: str = _f("motion", "detector: motion (background subtraction), hog (OpenCV people) or yolox "
+                       "(learned, YOLOX-Nano; needs `make models`)", choices=DETECTORS)
+    detect_every: int = _f(1, "detect and associate on every this many frames (the others are only "
+                           "counted; the head's motion over the skipped frames is accumulated); e.g. 3 for "
+                           "10 Hz detection on a 30 Hz camera", 1, 100)
     fov_h_deg: float = _f(8.0, "horizontal field of view (deg) for the ego-motion shift without CameraInfo",
                           0.1, 179.0)
     ego_motion_compensation: bool = _f(True, "compensate detector and predictions for the head's motion")
@@ -60,6 +65,11 @@ class AcquisitionParams:
                                 f"(then {_M.close_rel} x their running median height)", 1, 101)
     hog_hit_threshold: float = _f(0.0, "HOG SVM hit threshold", -5.0, 5.0)
     hog_upscale: float = _f(1.0, "resize factor before HOG (people under 128 px need > 1)", 0.25, 4.0)
+    yolox_score: float = _f(_Y.score, "learned detector: keep a person scoring (objectness x class) at "
+                            "least this", 0.01, 1.0)
+    yolox_nms_iou: float = _f(_Y.nms_iou, "learned detector: non-maximum suppression overlap (IoU)",
+                              0.05, 1.0)
+    yolox_threads: int = _f(_Y.threads, "learned detector: onnxruntime threads", 1, 16)
     auto_iou: float = _f(0.5, "automatic confirmation: IoU with the temporary track's prediction", 0.0, 1.0)
     auto_updates: int = _f(5, "automatic confirmation: updates needed", 1, 100)
     auto_window: int = _f(10, "automatic confirmation: frames allowed", 1, 1000)
@@ -74,7 +84,16 @@ class AcquisitionParams:
             raise ParameterError(f"parameter auto_updates = {self.auto_updates} exceeds auto_window "
                                  f"= {self.auto_window}")
 
+    def detector_problem(self) -> str | None:
+        """Why the chosen detector cannot be built (the learned one without its pinned file), else None."""
+        return model_problem() if self.detector == "yolox" else None
+
     def make_detector(self) -> Detector:
+        """The chosen detector; AcquisitionError (one line naming `make models`) when the learned one's
+        model file is missing or not the pinned one."""
+        if self.detector == "yolox":
+            return YoloxDetector(YoloxParams(score=self.yolox_score, nms_iou=self.yolox_nms_iou,
+                                             threads=self.yolox_threads))
         if self.detector == "hog":
             hog = HogParams(hit_threshold=self.hog_hit_threshold, upscale=self.hog_upscale)
             return HogPeopleDetector(hog)

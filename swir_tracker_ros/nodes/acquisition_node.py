@@ -60,7 +60,8 @@ class AcquisitionNode(Node):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
-        self.params = bind_parameters(self, AcquisitionParams, on_change=self._on_params)
+        self.params = bind_parameters(self, AcquisitionParams, on_change=self._on_params,
+                                      vet=AcquisitionParams.detector_problem)
         check_topic_names(self.params)
         self.mot_params = bind_parameters(self, MotParams, prefix=MOT_PREFIX, on_change=self._on_mot_params)
         self.detector = self.params.make_detector()
@@ -82,6 +83,7 @@ class AcquisitionNode(Node):
         self.pub_track_detections = self.create_publisher(
             Detection2DArray, topics.ACQUISITION_TRACK_DETECTIONS, output)
         self.size = (0, 0)
+        self.frames = 0  # images received (detect_every counts them)
         raw = self.params.image_transport == "raw"
         self.create_subscription(Image if raw else CompressedImage,
                                  topics.transport_topic(self.params.image_topic, self.params.image_transport),
@@ -133,6 +135,9 @@ class AcquisitionNode(Node):
         self.camera_intr = intrinsics_from_camera_info(msg)
 
     def _on_image(self, msg: Image | CompressedImage) -> None:
+        self.frames += 1
+        if (self.frames - 1) % self.params.detect_every:
+            return  # not a detection frame: the pose difference accumulates until the next one (_shift)
         frame = (image_to_numpy(msg) if isinstance(msg, Image) else compressed_to_numpy(msg)).pixels
         hdr = header_of(msg)
         height, width = frame.shape[:2]
@@ -160,7 +165,7 @@ class AcquisitionNode(Node):
             self.pub_candidates.publish(tracks_to_markers(candidates, hdr, CANDIDATES_NS))
         if self.params.auto_handoff and not self.awaiting_tracker and self.tracker_state in (
                 TrackState.IDLE, TrackState.LOST):
-            box = self.auto.step([d.box for d in dets])
+            box = self.auto.step([d.box for d in dets], shift)
             if box is not None:
                 self._hand_off(self._track_at(box), box)
         if self.params.publish_debug and self.pub_debug.get_subscription_count() > 0:

@@ -57,6 +57,8 @@ ARGUMENTS = (
     LaunchArgument("positioner_params", "", "positioner params file ('' = the installed positioner.yaml)"),
     LaunchArgument("acquisition", "false", "also start the acquisition node (pedestrians, hand-off)"),
     LaunchArgument("acquisition_params", "", "acquisition params file ('' = the installed one)"),
+    LaunchArgument("acquisition_detector", "", "acquisition detector: motion, hog or yolox (learned, needs "
+                   "`make models`); '' = the params file's"),
     LaunchArgument("pan_joint", "pan", "name of the pan joint: in the URDF, the bridge's joint states and "
                    "what the tracker and acquisition read"),
     LaunchArgument("tilt_joint", "tilt", "name of the tilt joint (as pan_joint)"),
@@ -108,6 +110,7 @@ class BringupArgs:
     positioner_params: str = ""
     acquisition: bool = False
     acquisition_params: str = ""
+    acquisition_detector: str = ""
     pan_joint: str = "pan"
     tilt_joint: str = "tilt"
     zoom_joint: str = "zoom"
@@ -257,7 +260,9 @@ def bringup_nodes(args: BringupArgs, share: str) -> list[NodeSpec]:
             params_files=(args.acquisition_params or str(params / "acquisition.yaml"),),
             overrides={"image_topic": args.image_topic, "image_transport": args.image_transport,
                        "camera_info_topic": args.camera_info_topic, "joint_states_topic": JOINT_STATES,
-                       **joints, **common}, **spec))
+                       **joints, **common,
+                       **({"detector": args.acquisition_detector} if args.acquisition_detector else {})},
+            **spec))
     return nodes
 
 

@@ -14,7 +14,7 @@ import os
 import sys
 from pathlib import Path
 
-from swir_tracker_ros.core.siamese.weights import SHARE_SUBDIR, PinnedFile, pinned, sha256_of
+from swir_tracker_ros.core.siamese.weights import DETECTOR_PINNED, SHARE_SUBDIR, PinnedFile, pinned, sha256_of
 from swir_tracker_ros.errors import ModelError
 
 ENV_VAR = "SWIR_TRACKER_MODELS"
@@ -22,8 +22,10 @@ ENV_VAR = "SWIR_TRACKER_MODELS"
 
 def fix(pin: PinnedFile) -> str:
     """The one fix sentence of a missing or corrupt file: `make models`, the variable, the upstream URL."""
+    holding, doc = (("detector/", "docs/acquisition.md") if pin in DETECTOR_PINNED
+                    else ("v2/, v3/ and lighttrack/", "docs/siamese.md"))
     return (f"run `make models` (copies ../shared/models or fetches the pinned upstream {pin.source.page}), "
-            f"or set {ENV_VAR} to a directory holding v2/, v3/ and lighttrack/ (docs/siamese.md)")
+            f"or set {ENV_VAR} to a directory holding {holding} ({doc})")
 
 _verified: dict[Path, str] = {}  # resolved file -> sha256 seen (a file is hashed once per process)
 

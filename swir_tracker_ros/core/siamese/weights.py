@@ -13,9 +13,17 @@ the sha256 below either way.
   commit, checked, and converted by the mirror's own `convert_ir_to_onnx.py` (run with `--python`, which needs
   `onnx` and `numpy`); the ONNX it writes is checked against the pin like any other file. The converter is
   never copied into this repository: without it, one error says what is missing and how to get it.
+- YOLOX-Nano, the acquisition's learned person detector (`DETECTOR_PINNED`; Megvii's Apache-2.0 COCO
+  checkpoint of release 0.1.1rc0 exported to ONNX by the authors' tools/export_onnx.py, as committed by
+  Kazuhito00/YOLOX-ONNX-TFLite-Sample, whose notebook records the export; docs/acquisition.md), with the
+  upstream's LICENSE beside it. No shared mirror holds it, so it is optional: `make models` installs it when
+  it can (mirror `detector/`, a local git mirror of the upstream repository (`--git-mirrors`, default
+  $SWIR_TRACKER_GIT_MIRRORS: a folder of `owner+name` git directories, as `fetch` leaves them), else the
+  download) and otherwise says what is missing without failing; the acquisition node refuses that
+  detector alone.
 
     python swir_tracker_ros/core/siamese/weights.py --dest DIR [--mirror DIR] [--no-download] [--python PY]
-        [--converter FILE] [--optional]
+        [--converter FILE] [--optional] [--git-mirrors DIR]
 """
 
 from __future__ import annotations
@@ -60,7 +68,11 @@ NANOTRACK = Upstream("HonglinChu/SiamTrackers", "248663fde6bf7c40190cf10ee396d56
                      "Apache-2.0 (NanoTrack/LICENSE of the upstream repository)", "NanoTrack/models")
 LIGHTTRACK_IR = Upstream("l-sf/LightTrack_openvino", "5eaaf93fddeecf0dfce4e8c0daf4ab2bf7f4a4c1",
                          "MIT (the authors' checkpoint, researchmm/LightTrack LICENSE)", "models")
+YOLOX_NANO = Upstream("Kazuhito00/YOLOX-ONNX-TFLite-Sample", "3d4f1119d0694200671c08069ecb847aa0d8495a",
+                      "Apache-2.0 (LICENSE of the upstream repository; YOLOX itself, "
+                      "Megvii-BaseDetection/YOLOX, is Apache-2.0)", "model")
 UPSTREAM_COMMIT = NANOTRACK.commit
+GIT_MIRRORS_VAR = "SWIR_TRACKER_GIT_MIRRORS"  # default of --git-mirrors
 
 
 @dataclass(frozen=True)
@@ -112,13 +124,22 @@ IR_PINNED: tuple[PinnedFile, ...] = (  # LightTrack-M's upstream OpenVINO IR, th
 )
 
 
+DETECTOR_PINNED: tuple[PinnedFile, ...] = (  # optional: installed when obtainable (module docstring)
+    PinnedFile("detector/yolox_nano.onnx", "detector/yolox_nano.onnx",
+               "695e750a5d5754bb5a8d5325643b59282191a7e7a564e435a415fd3c578eab14", YOLOX_NANO,
+               "model/yolox_nano.onnx"),
+    PinnedFile("detector/LICENSE", "detector/LICENSE",
+               "c71d239df91726fc519c6eb72d318ec65820627232b2f796219e87dcf35d0ab4", YOLOX_NANO, "LICENSE"),
+)
+
+
 class FetchError(Exception):
     """A model file could not be copied, downloaded or converted, or its content is not the pinned one."""
 
 
 def pinned(path: str) -> PinnedFile:
     """The pin of `path` (e.g. "v2/nanotrack_head_sim.onnx"); KeyError if it is not pinned."""
-    for f in PINNED:
+    for f in (*PINNED, *DETECTOR_PINNED):
         if f.path == path:
             return f
     raise KeyError(path)
@@ -181,7 +202,72 @@ def how_to_get(f: PinnedFile) -> str:
     """What to do when `f` cannot be put in place (the one fix sentence of an error)."""
     return (f"put ../shared (its models/{f.mirror.split('/')[0]}) beside the repository and run `make "
             f"models`, or download it from {f.source.page}, or set SWIR_TRACKER_MODELS to a directory "
-            f"holding {f.path} (docs/siamese.md)")
+            f"holding {f.path} ({'docs/acquisition.md' if f in DETECTOR_PINNED else 'docs/siamese.md'})")
+
+
+def git_dir(root: Path, repo: str) -> Path | None:
+    """The git directory of `repo` ("owner/name") under a folder of local mirrors: `owner+name` or
+    `owner/name`, itself a git directory or holding `repo/` or `.git` (the layouts `fetch` and
+    ../shared/mot_corpus/build.py use); None when there is none."""
+    owner, name = repo.split("/", 1)
+    for base in (root / f"{owner}+{name}", root / owner / name):
+        for cand in (base / "repo" / ".git", base / "repo", base / ".git", base):
+            if (cand / "HEAD").is_file() and (cand / "objects").is_dir():
+                return cand
+    return None
+
+
+def _from_git(f: PinnedFile, gdir: Path) -> Callable[[Path], str]:
+    """Write `f`'s upstream file at the pinned commit out of a local git mirror (`git cat-file`)."""
+    def produce(tmp: Path) -> str:
+        spec = f"{f.source.commit}:{f.upstream}"
+        try:
+            with tmp.open("wb") as out:
+                run = subprocess.run(["git", f"--git-dir={gdir}", "cat-file", "blob", spec], stdout=out,
+                                     stderr=subprocess.PIPE, text=False, check=False)
+        except OSError as exc:
+            raise FetchError(f"{f.path}: cannot run git ({exc})") from None
+        if run.returncode != 0:
+            raise FetchError(f"{f.path}: {gdir} has no {spec} "
+                             f"({run.stderr.decode(errors='replace').strip() or 'git failed'})")
+        return f"{gdir} at {f.source.commit[:12]}"
+    return produce
+
+
+def fetch_optional(dest: Path, mirror: Path | None = None, git_mirrors: Path | None = None,
+                   fetch: Callable[[str, Path], None] | None = download,
+                   files: tuple[PinnedFile, ...] = DETECTOR_PINNED) -> dict[str, str]:
+    """The optional pinned files (the person detector) under `dest`, verified: already there, else copied
+    from `mirror`, else taken from a local git mirror of the upstream under `git_mirrors`, else downloaded
+    with `fetch`. Never raises: {path: origin} for each file put in place, {path: "missing: <why and how to
+    get it>"} for each that could not be."""
+    dest = Path(dest)
+    done: dict[str, str] = {}
+    for f in files:
+        target = dest / f.path
+        if target.is_file() and sha256_of(target) == f.sha256:
+            done[f.path] = "present"
+            continue
+        tries: list[Callable[[Path], str]] = []
+        src = mirror / f.mirror if mirror is not None else None
+        if src is not None and src.is_file():
+            tries.append(lambda tmp, src=src: (shutil.copyfile(src, tmp), str(src))[1])
+        gdir = git_dir(git_mirrors, f.source.repo) if git_mirrors is not None else None
+        if gdir is not None:
+            tries.append(_from_git(f, gdir))
+        if fetch is not None:
+            tries.append(_downloaded(f, fetch))
+        why = ["no mirror copy, no local git mirror and downloading is off"] if not tries else []
+        for produce in tries:
+            try:
+                done[f.path] = _put(f, target, produce)
+                break
+            except (FetchError, OSError) as exc:
+                why.append(str(exc))
+        else:
+            why_text, fix = "; ".join(why), how_to_get(f)
+            done[f.path] = f"missing: {why_text}" + ("" if fix in why_text else f"; {fix}")
+    return done
 
 
 @dataclass
@@ -276,15 +362,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-download", action="store_true", help="never download (mirror or nothing)")
     ap.add_argument("--python", default=sys.executable, help="interpreter for the IR converter (onnx, numpy)")
     ap.add_argument("--converter", default=None, help=f"IR-to-ONNX converter (default: <mirror>/{CONVERTER})")
+    ap.add_argument("--git-mirrors", default=os.environ.get(GIT_MIRRORS_VAR),
+                    help=f"folder of local git mirrors (owner+name/) to take the optional detector from "
+                         f"(default ${GIT_MIRRORS_VAR})")
     ap.add_argument("--optional", action="store_true",
                     help="say what is missing and how to get it, but exit 0 (`make venv`: the correlation "
                          "filters need no model)")
     a = ap.parse_args(argv)
     mirror = Path(a.mirror) if a.mirror and Path(a.mirror).is_dir() else None
     script = Path(a.converter) if a.converter else (mirror / CONVERTER if mirror is not None else None)
+    fetch = None if a.no_download else download
     try:
-        done = fetch_models(Path(a.dest), mirror, None if a.no_download else download,
-                            Converter(script, a.python))
+        done = fetch_models(Path(a.dest), mirror, fetch, Converter(script, a.python))
     except FetchError as exc:
         if a.optional:
             print(f"models: not installed: {exc}. The configurations that need a network (siamese, fused, "
@@ -294,6 +383,14 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     for path, origin in done.items():
         print(f"models: {path}: {origin} (sha256 ok)")
+    git_mirrors = Path(a.git_mirrors) if a.git_mirrors else None
+    for path, origin in fetch_optional(Path(a.dest), mirror, git_mirrors, fetch).items():
+        if origin.startswith("missing: "):
+            print(f"models: {path}: not installed ({origin[9:]}). The acquisition's learned detector "
+                  f"(detector: yolox) will refuse to start; the motion and HOG detectors work.",
+                  file=sys.stderr)
+        else:
+            print(f"models: {path}: {origin} (sha256 ok)")
     return 0
 
 
