@@ -74,6 +74,10 @@ class LeadParams:
     resume_speed: float = param(
         0.5, "share of the target's speed at the loss by which the resume radius grows per missed frame",
         0.0, 10.0)
+    gate_size: float = param(
+        32.0, "pixels: a target smaller than this counts as this size in the motion gates (distances in "
+              "target sizes): a small target's box jitters, and the camera shakes, by more than its size",
+        1.0, 10000.0)
     resume_size: float = param(
         1.5, "a candidate near the prediction resumes the track only when its regressed size lies within "
              "this factor of the last accepted size (either way): a box grown onto an occluder or shrunk "
@@ -172,7 +176,7 @@ class NetworkLead:
         self.net.center = (cx + dx, cy + dy)
         det = self.net.search(image, *self.net.center, *self.net.size)  # 2. search: the network's own
         c = cues(det)
-        size = math.sqrt(self.box.w * self.box.h)
+        size = max(math.sqrt(self.box.w * self.box.h), self.p.gate_size)  # the motion gates' unit
         shown: tuple[Box, ...] = (_crop(det),)
         mode = SearchMode.NORMAL
         resumed, gone, velocity = False, True, None
@@ -273,7 +277,7 @@ class NetworkLead:
         if c.psr < v.resume_bar() or c.score < v.p.score_gone:
             return False
         if off_path(det.smoothed, pred, size) <= self._radius():
-            grow = math.sqrt(det.box.w * det.box.h) / max(size, 1e-6)
+            grow = math.sqrt(det.box.w * det.box.h / max(self.box.w * self.box.h, 1e-12))
             return 1.0 / self.p.resume_size <= grow <= self.p.resume_size
         typical = math.exp(v.typical) if v.typical is not None else 0.0
         return self.missed >= self.p.long_loss and c.psr >= self.p.strong_ratio * typical
