@@ -90,7 +90,8 @@ def test_a_candidate_resumes_only_where_the_motion_allows_or_strongly_after_a_lo
                    strong_ratio=0.1)
     lead = NetworkLead(p, None)  # the resume rule reads no network
     lead.verdict.gone, lead.verdict.typical = True, math.log(1000.0)  # typical tracked PSR 1000
-    pred, size = Box.from_center(100.0, 100.0, 20.0, 20.0), 20.0
+    pred, size = Box.from_center(100.0, 100.0, 20.0, 20.0), 20.0  # `size`: the gates' unit
+    lead.box = pred  # the last accepted box (the size check's reference)
     lead.missed = 10  # radius 0.5 + 10 x 0.05 = 1 target size: 20 px
     bar = lead.verdict.resume_bar()
     assert lead._resumes(_candidate(115.0, 100.0, 20.0, 20.0), _cues(bar), pred, size)
@@ -172,3 +173,27 @@ def test_a_far_candidate_resumes_only_after_a_long_loss(crossing_frames) -> None
         assert res.aim is not None and res.aim.center == pytest.approx(box.center)  # held: nothing moved
     assert found is not None, "the long-loss search never found the moved target"
     assert found[0] >= 6 and found[1].iou(target) > 0.5  # not before the long loss: the motion forbade it
+
+
+def test_a_candidate_away_from_the_prediction_must_show_itself_on_two_frames() -> None:
+    lead = NetworkLead(LeadParams(resume_radius=0.5), None)
+    pred, size = Box.from_center(100.0, 100.0, 20.0, 20.0), 20.0
+    assert lead._confirmed(Box.from_center(105.0, 100.0, 20.0, 20.0), pred, size)  # at the predicted place
+    far = Box.from_center(200.0, 100.0, 20.0, 20.0)
+    assert not lead._confirmed(far, pred, size) and lead._pending == far  # seen once: searched again
+    assert not lead._confirmed(Box.from_center(300.0, 100.0, 20.0, 20.0), pred, size)  # elsewhere: not it
+    assert lead._confirmed(Box.from_center(304.0, 100.0, 20.0, 20.0), pred, size)  # there again: it is
+    assert lead._pending is None
+
+
+def test_the_networks_own_answer_at_the_predicted_place_holds_it_until_a_long_loss() -> None:
+    lead = NetworkLead(LeadParams(resume_radius=0.5, long_loss=10), None)
+    pred, size = Box.from_center(100.0, 100.0, 20.0, 20.0), 20.0
+    here, away = _candidate(105.0, 100.0, 20.0, 20.0), _candidate(115.0, 100.0, 20.0, 20.0)
+    lead.missed = 3
+    assert lead._holds(here, _cues(5.0), pred, size)  # an ambiguous map (PSR 5) at the predicted place
+    assert not lead._holds(away, _cues(5.0), pred, size)  # it left the place
+    assert not lead._holds(here, _cues(2.0), pred, size)  # below the lower bar: nothing holds
+    assert not lead._holds(here, _cues(5.0, 0.5), pred, size)
+    lead.missed = 10
+    assert not lead._holds(here, _cues(5.0), pred, size)  # after a long loss the lattice may take it
