@@ -267,8 +267,8 @@ class NetworkLead:
         prediction, above the lower bars (a map made ambiguous by a look-alike beside the target, not a
         lost target): no other candidate may take the track then (the motion decides between look-alikes)."""
         g = self.verdict.p
-        return (self.missed < self.p.long_loss and off_path(det.smoothed, pred, size) <= self.p.resume_radius
-                and c.psr >= g.psr_gone and c.score >= g.score_gone)
+        return (off_path(det.smoothed, pred, size) <= self.p.resume_radius and c.psr >= g.psr_gone
+                and c.score >= g.score_gone)
 
     def _resumes(self, det: SiameseDetection, c: GoneCues, pred: Box, size: float) -> bool:
         """A candidate resumes the track: the appearance's resume bar, and a place the motion allows (or,
