@@ -314,8 +314,8 @@ def test_the_sweep_finds_a_target_that_turned_back_while_hidden() -> None:
     leaves the image: without the sweep the track ended `lost` on every SRE start (measured; from the left
     start: `lost` at frame 225, AUC 0.32). With the long-loss sweep (`sweep_after` 25, the default) a tile
     finds him walking back, the window centred there passes the re-acquisition bars and the memory, and he
-    is `tracking` again within a second of reappearing (measured: the sweep's find on frame 200, 163 px
-    from the prediction, `tracking` from 201, AUC 0.67); no `tracking` frame off him on the way. The
+    is `tracking` again within a second of reappearing (measured: the sweep's find on update 201, 163 px
+    from the prediction, `tracking` from update 202, AUC 0.67); no `tracking` frame off him on the way. The
     mechanism is pinned (the re-acquisition is the sweep's find); the run without the sweep is not (its
     chaotic search is not what is tested)."""
     on, results = sweep_run("t2_partial_full_turn_back", "left")
@@ -331,7 +331,7 @@ def test_the_sweep_finds_the_walker_the_occluders_edge_held_the_box_from() -> No
     after he walks on (measured without the sweep: never `tracking` again, AUC 0.30-0.32). The sweep's
     tiles also run on such rejected frames; his window, correlated at the re-detection's sizes (the box had
     grown to ~1.4x while held), passes the bars: re-acquired, no false-tracking frame (measured: the
-    sweep's find on frame 206, 88 px away, `tracking` from 207, AUC 0.64). Pinned: the re-acquisition is
+    sweep's find on update 207, 88 px away, `tracking` from update 208, AUC 0.64). Pinned: the re-acquisition is
     the sweep's find."""
     on, results = sweep_run("x_low_contrast_interlaced", "top_left")
     assert on.survived == 1 and on.false_tracking == 0, on
