@@ -331,8 +331,8 @@ def test_the_sweep_finds_the_walker_the_occluders_edge_held_the_box_from() -> No
     after he walks on (measured without the sweep: never `tracking` again, AUC 0.30-0.32). The sweep's
     tiles also run on such rejected frames; his window, correlated at the re-detection's sizes (the box had
     grown to ~1.4x while held), passes the bars: re-acquired, no false-tracking frame (measured: the
-    sweep's find on update 207, 88 px away, `tracking` from update 208, AUC 0.64). Pinned: the re-acquisition is
-    the sweep's find."""
+    sweep's find on update 207, 88 px away, `tracking` from update 208, AUC 0.64). Pinned: the
+    re-acquisition is the sweep's find."""
     on, results = sweep_run("x_low_contrast_interlaced", "top_left")
     assert on.survived == 1 and on.false_tracking == 0, on
     returns = _returns(results)
