@@ -103,6 +103,96 @@ def test_false_tracking_and_skipped_frames_are_counted() -> None:
     assert table.markdown(rows).count("\n| demo |") == 2
 
 
+def test_the_exit_status_names_each_failed_run_and_the_criteria_it_missed() -> None:
+    """Issue 52 item 5: `demo` and `demo sweep` exit 1 when any run misses a success criterion, with one line
+    naming each failed run and what it missed; 0 when every run succeeded."""
+    from swir_tracker_ros.demo import table
+
+    good = summarise(synthetic_records())
+    false = synthetic_records()
+    for row in false.track[100:104]:
+        row[2] = [row[2][0] + 200.0, *row[2][1:]]  # `tracking` on background, 200 px away
+    gone = synthetic_records()
+    for row in gone.truth[-20:]:
+        row[4] = math.radians(5.0)  # out of the 4 deg half field of view for the last 0.8 s
+    cut = synthetic_records()
+    cut.outcome = "interrupted"
+    assert table.missed(good) == []
+    assert table.exit_status([table.row_from("demo", 1, True, 1, good, REPO)]) == (0, "")
+    rows = [table.row_from("demo", 1, True, 1, good, REPO),
+            table.row_from("demo", 2, True, 1, summarise(false), REPO),
+            table.row_from("demo_fast", 3, False, 2, summarise(gone), REPO),
+            table.row_from("demo", 4, True, 1, summarise(cut), REPO)]
+    assert [r.success for r in rows] == [True, False, False, False]
+    status, line = table.exit_status(rows, ["demo seed 5 (did not finish: tracker exited early with code 1)"])
+    assert status == 1 and "\n" not in line, line
+    assert line.startswith("4 of 5 runs failed: ") and "demo seed 1 " not in line, line
+    assert "demo seed 2 (4 false-tracking frames)" in line, line
+    # 0.8 s of 6 s out of view: 86.7 % of the run, and not at the end
+    assert ("demo_fast seed 3 ego off repeat 2 (target out of view at the end; in view 86.7% < 95%)"
+            in line), line
+    assert "demo seed 4 (run not completed (interrupted))" in line and "did not finish" in line, line
+
+
+def _fake_runs(monkeypatch, tmp_path, module, fail_seeds: set[int]) -> list[int]:
+    """Replace `module.run_once` (the closed loop) by one that returns the synthetic run's records and
+    summary, with 10 false-tracking frames for a seed in `fail_seeds`; the seeds it was called with."""
+    from swir_tracker_ros.demo.runner import RunResult
+
+    called: list[int] = []
+
+    def run_once(p, out, ego, i, log=print, video=True):
+        called.append(p.seed)
+        rec = synthetic_records(ego)
+        if p.seed in fail_seeds:
+            for row in rec.track[100:110]:
+                row[2] = [row[2][0] + 200.0, *row[2][1:]]
+        folder = out / ("ego_on" if ego else "ego_off")
+        folder.mkdir(parents=True, exist_ok=True)
+        return RunResult(rec, summarise(rec), folder, {})
+
+    monkeypatch.setattr(module, "run_once", run_once)
+    return called
+
+
+def test_demo_and_sweep_exit_1_when_a_run_fails_and_2_on_bad_input(tmp_path, monkeypatch, capsys) -> None:
+    """The exit status of both commands, decided from the runs' summaries (the closed loop replaced by the
+    synthetic run): 0 when every run succeeded, 1 with the one-line reason when one failed, 2 on bad
+    input before anything runs."""
+    from swir_tracker_ros.demo import run, sweep
+
+    monkeypatch.setattr(run, "make_plots", lambda *a, **k: [])  # the plots are not what is checked here
+    _fake_runs(monkeypatch, tmp_path, run, set())
+    assert run.main(["--out", str(tmp_path / "ok"), "--seed", "1"]) == 0
+    assert "runs failed" not in capsys.readouterr().err
+    _fake_runs(monkeypatch, tmp_path, run, {7})
+    assert run.main(["--out", str(tmp_path / "bad"), "--seed", "7"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["demo: 2 of 2 runs failed: demo seed 7 (10 false-tracking frames), "
+                   "demo seed 7 ego off (10 false-tracking frames)"], err
+    assert run.main(["--out", str(tmp_path / "x"), "--scene", "nowhere"]) == 2
+    assert capsys.readouterr().err.startswith("demo: ")
+
+    called = _fake_runs(monkeypatch, tmp_path, sweep, {2})
+    assert sweep.main(["--out", str(tmp_path / "sweep"), "--seeds", "3"]) == 1
+    assert called == [1, 2, 3]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["demo sweep: 1 of 3 runs failed: demo seed 2 (10 false-tracking frames)"], err
+    _fake_runs(monkeypatch, tmp_path, sweep, set())
+    assert sweep.main(["--out", str(tmp_path / "sweep"), "--seeds", "1,3"]) == 0
+    assert sweep.main(["--out", str(tmp_path / "sweep"), "--seeds", "x"]) == 2
+
+    def crashes(p, out, ego, i, log=print, video=True):
+        raise DemoError("tracker exited early with code 1:\n(log tail)")
+
+    monkeypatch.setattr(sweep, "run_once", crashes)  # a run that leaves no records failed too
+    capsys.readouterr()
+    assert sweep.main(["--out", str(tmp_path / "crash"), "--seeds", "4,5"]) == 1
+    assert capsys.readouterr().err.strip().splitlines()[-1] == (
+        "demo sweep: no run finished: demo seed 4 (did not finish: tracker exited early with code 1), "
+        "demo seed 5 (did not finish: tracker exited early with code 1)")
+
+
 def test_init_is_answered_by_tracking_after_the_first_init() -> None:
     """Init sent for the frame at 100.0 s, resent at 100.5 and 101.0 (the tracker had not answered yet):
     a `tracking` state for the frame at 100.2 answers it (the old rule compared with the last resend and

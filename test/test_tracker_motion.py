@@ -59,8 +59,8 @@ def _moved_after_loss(coast: int) -> float:
 
 def test_the_prediction_stops_after_coast_frames_of_loss() -> None:
     """With the papers' constant-velocity coast the prediction walks on into empty background (measured:
-    53 px, until background peaks at the prediction hold it); with `coast_frames` 8 the centre velocity
-    is dropped after 8 frames of re-detection and the search stays near where the figure was lost."""
+    123-128 px in the 60 frames, at 2.1-2.3 px/frame); with `coast_frames` 8 the centre velocity is dropped
+    after 8 frames of re-detection and the search stays near where the figure was lost (21 px)."""
     free, held = _moved_after_loss(0), _moved_after_loss(8)
     assert held < 3.0 * 8 + 8.0 and held < free - 15.0, (free, held)
 
@@ -95,41 +95,55 @@ def test_scale_penalty_keeps_the_box_from_growing_onto_the_surroundings(sequence
     assert free > 1.35 and weighted < 1.25, (free, weighted)
 
 
-def _lunge_then_hide(window: int) -> tuple[float, bool]:
+def _lunge_then_hide(window: int) -> tuple[float, float, float, float, bool]:
     """A figure stands for 50 frames, lunges left at 4 px/frame for its last 6 frames in view, is hidden for
-    30 frames and shows again where it vanished: (how far the box moved on while it was hidden, whether
-    it is `tracking` with the figure inside the box 20 frames after it showed again)."""
+    30 frames and shows again where it vanished: (the Kalman's centre velocity on the last tracked frame,
+    the trail's mean velocity over its `window` frames there (px/frame), the centre velocity the first
+    hidden frame coasts on, how far the box moved on while the figure was hidden, whether it is `tracking`
+    with the figure inside the box 20 frames after it showed again)."""
     bg = _background(240, 480, 11)
     p = TrackerParams(trail_frames=window)
     p.coast.trail_velocity = window > 0
     trk = Tracker(p)
     trk.init(_frame(bg, 240.0, 120.0), Box(232.0, 104.0, 16.0, 32.0))
-    cx = 240.0
+    cx, centres = 240.0, []
     for k in range(1, 56):
         if k > 49:
             cx -= 4.0
         res = trk.update(_frame(bg, cx, 120.0))
+        centres.append(res.box.cx)
     assert res.state is TrackState.TRACKING
-    lost_at = res.box.cx
-    for _ in range(30):
+    lost_at, kalman = res.box.cx, res.velocity[0]
+    trail = (centres[-1] - centres[-window]) / window if window else math.nan  # a full window: its span
+    res = trk.update(_frame(bg, None, 120.0))
+    assert res.state is not TrackState.TRACKING
+    coast = res.velocity[0]
+    for _ in range(29):
         res = trk.update(_frame(bg, None, 120.0))
     moved = abs(res.box.cx - lost_at)
     for _ in range(20):
         res = trk.update(_frame(bg, cx, 120.0))
     back = res.state is TrackState.TRACKING and abs(res.box.cx - cx) < 8.0
-    return moved, back
+    return kalman, trail, coast, moved, back
 
 
 def test_coast_velocity_is_the_trails_not_the_last_frames() -> None:
     """The Kalman velocity at the moment of loss follows the last frames (a lunge, a turn: OTB girl, where
     the prediction walked out of the image at 1 px/frame while the girl stayed). `coast.trail_velocity`
     with a 50-frame trail coasts on the mean velocity of the last 50 tracked frames instead (24 px / 50
-    frames here), so the search stays near where the figure vanished and finds it there again (measured:
-    moved 4 px and back; with the Kalman velocity 82 px and not back)."""
-    kalman_moved, kalman_back = _lunge_then_hide(0)
-    trail_moved, trail_back = _lunge_then_hide(50)
-    assert trail_back and trail_moved < 20.0, (trail_moved, trail_back)
-    assert kalman_moved > trail_moved + 30.0 and not kalman_back, (kalman_moved, kalman_back)
+    frames here), so the search stays near where the figure vanished and finds it there again. The
+    mechanism is pinned: which velocity each variant coasts on (measured: -0.48 px/frame from the trail,
+    -2.67 the Kalman's) and how far each coasts (15 px; 82 px), and the trail's variant finds the figure
+    again. Whether the Kalman's variant, 82 px away, still finds it by the re-detection's chaotic search is
+    not pinned: it did not on this machine, it did under OpenCV without AVX2/FMA3 on another (issue 50)."""
+    k_kalman, _, k_coast, k_moved, _ = _lunge_then_hide(0)
+    t_kalman, t_trail, t_coast, t_moved, t_back = _lunge_then_hide(50)
+    # the lunge: the Kalman has taken up most of its 4 px/frame; the trail averages it over 50 frames
+    assert k_kalman < -2.0 and t_kalman < -2.0 and -0.6 < t_trail < -0.4, (k_kalman, t_kalman, t_trail)
+    assert k_coast == pytest.approx(k_kalman, abs=1e-6), (k_coast, k_kalman)
+    assert t_coast == pytest.approx(t_trail, abs=0.005), (t_coast, t_trail)
+    assert t_back and t_moved < 20.0, (t_moved, t_back)
+    assert k_moved > t_moved + 30.0, (k_moved, t_moved)
 
 
 def test_a_long_occlusion_is_searched_until_the_target_shows_again() -> None:
@@ -264,24 +278,48 @@ def test_a_weak_frame_does_not_extrapolate_a_shrinking_size(sequences_dir: Path)
     assert abs(on - 1.0) < 0.005 and off < 0.96, (on, off)
 
 
+class _Recording(Tracker):
+    """A Tracker that keeps every TrackResult it returned."""
+
+    def __init__(self, params: TrackerParams) -> None:
+        super().__init__(params)
+        self.results: list = []
+
+    def update(self, *args, **kwargs):
+        res = super().update(*args, **kwargs)
+        self.results.append(res)
+        return res
+
+
 def test_a_gate_that_nothing_passes_freezes_the_model_unless_unconfident_frames_teach_it(
     sequences_dir: Path,
 ) -> None:
     """OTB skating1 (stage lighting): after the first 10 frames no peak reaches the LMCF gate's bar (0.7 x the
     mean peak of the updated frames, set by the bright first frames), the filter is never updated again and
-    the skater is lost (measured: 9 updates, AUC 0.232). With `unconfident_rate` 0.2 (the default), once the
-    gate has refused `unconfident_after` (10) tracked frames, a refused tracked frame still teaches the filter
-    at a fifth of its rate and the skater is kept (measured: AUC 0.589). Pinned to `size_rate_peak_ratio` 0,
-    `redetect_psr` 0 and no long-loss sweep, the setting of that measurement (with the ninth pass's PSR bar
-    the frozen filter scores 0.362, with the long-loss sweep 0.628: the skater is re-acquired later, by other
-    paths)."""
+    the skater is lost (measured: 10 updates, the last on frame 10, none on the 86 later `tracking` frames;
+    AUC 0.236). With `unconfident_rate` 0.2 (the default), once the gate has refused `unconfident_after` (10)
+    tracked frames, a refused tracked frame still teaches the filter at a fifth of its rate and the skater is
+    kept (measured: updates on 197-205 of the 197-208 `tracking` frames after frame 20, AUC 0.71). The
+    mechanism is pinned (which frames teach the filter in each variant) and the default's AUC; how badly the
+    frozen variant's run goes is not (a chaotic run). Pinned to `size_rate_peak_ratio` 0, `redetect_psr` 0
+    and no long-loss sweep, the setting of that measurement (with the ninth pass's PSR bar the frozen filter
+    scores 0.362, with the long-loss sweep 0.628: the skater is re-acquired later, by other paths)."""
     src = open_source(sequences_dir / "otb_skating1")
 
-    def run(rate: float) -> RunStats:
+    def run(rate: float) -> tuple[RunStats, int, int, int]:
+        """(scores, updates in the first 10 frames, `tracking` frames after frame 20, of them updated)."""
         params = TrackerParams(sweep=None)
         params.update.unconfident_rate = rate
         params.coast.size_hold_peak_ratio, params.occlusion.reacquire_psr = 0.0, 0.0
-        return RunStats.of(run_source(src, lambda: Tracker(params)), src.fps)
+        trk = _Recording(params)
+        stats = RunStats.of(run_source(src, lambda: trk), src.fps)
+        later = [r for r in trk.results[20:] if r.state is TrackState.TRACKING]
+        return (stats, sum(r.model_updated for r in trk.results[:10]), len(later),
+                sum(r.model_updated for r in later))
 
     frozen, taught = run(0.0), run(0.2)
-    assert frozen.success_auc < 0.3 and taught.success_auc > 0.5, (frozen, taught)
+    # the same first frames teach both filters (the gate passes them), then the gate refuses the rest
+    assert frozen[1] == taught[1] >= 5, (frozen, taught)
+    assert frozen[2] > 20 and frozen[3] == 0, frozen  # tracked, refused, never taught
+    assert taught[2] > 100 and taught[3] > 0.8 * taught[2], taught  # refused frames teach at 0.2
+    assert taught[0].success_auc > 0.5, taught

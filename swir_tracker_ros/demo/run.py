@@ -53,6 +53,10 @@ def main(argv: list[str] | None = None) -> int:
         p = load_demo_params(args.params)
         p = p.with_overrides(duration_s=args.duration, scene=args.scene, seed=args.seed,
                              bag_images=True if args.bag_images else None)
+    except DemoError as exc:  # bad input: nothing started
+        print(f"demo: {exc}", file=sys.stderr)
+        return 2
+    try:
         out = args.out.resolve()
         out.mkdir(parents=True, exist_ok=True)
         started = time.monotonic()
@@ -94,8 +98,10 @@ def main(argv: list[str] | None = None) -> int:
           f"start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} CPUs.")
     print(f"[demo] report: {paths['html']}  (open it in a browser, e.g. `xdg-open {paths['html']}`)")
     print(f"[demo] also: {paths['md']}, {paths['json']}, plots in {out / 'plots'}")
-    ok = all(r.records.outcome == "completed" for r in results)
-    return 0 if ok else 1
+    status, why = table.exit_status(rows)
+    if status:
+        print(f"demo: {why}", file=sys.stderr)
+    return status
 
 
 if __name__ == "__main__":

@@ -17,7 +17,15 @@ from swir_tracker_ros.demo.analysis import summarise
 from swir_tracker_ros.demo.config import load_demo_params
 from swir_tracker_ros.demo.recording import RunRecords
 from swir_tracker_ros.demo.runner import run_once
-from swir_tracker_ros.demo.table import SUCCESS_IN_VIEW, SweepRow, markdown, row_from, text
+from swir_tracker_ros.demo.table import (
+    SUCCESS_IN_VIEW,
+    SweepRow,
+    exit_status,
+    markdown,
+    row_from,
+    run_name,
+    text,
+)
 from swir_tracker_ros.errors import DemoError
 from swir_tracker_ros.scene.demo_scene import VARIANTS, build_scene, target_visibility
 
@@ -85,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     started, load_before = time.monotonic(), os.getloadavg()[0]
     rows: list[SweepRow] = []
+    unfinished: list[str] = []  # runs that left no records: failed, named with their error
+    interrupted = False
     plan = [(scene, seed, k, ego) for scene in scenes for seed in seeds for k in range(args.repeat)
             for ego in ((True, False) if args.ego_off else (True,))]
     load = BackgroundLoad(os.cpu_count() or 1) if args.load else None
@@ -103,6 +113,8 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"[sweep] {scene} seed {seed}: {exc}", file=sys.stderr)
                 rec_path = folder / ("ego_on" if ego else "ego_off") / "records.json"
                 if not rec_path.is_file():
+                    first = str(exc).splitlines()[0].rstrip(":") if str(exc) else type(exc).__name__
+                    unfinished.append(f"{run_name(scene, seed, ego, k + 1)} (did not finish: {first})")
                     continue
                 scene_built = build_scene(scene, seed)
                 exits = {}
@@ -115,20 +127,25 @@ def main(argv: list[str] | None = None) -> int:
                   f"{'success' if rows[-1].success else 'FAILED'}", flush=True)
             _write(out, rows, load_before, args.load, time.monotonic() - started)
     except KeyboardInterrupt:
+        interrupted = True
         print("demo sweep: interrupted", file=sys.stderr)
     finally:
         if load is not None:
             load.__exit__(None, None, None)
     if not rows:
-        print("demo sweep: no run finished", file=sys.stderr)
-        return 1
+        print("demo sweep: no run finished" + (f": {', '.join(unfinished)}" if unfinished else ""),
+              file=sys.stderr)
+        return 130 if interrupted else 1
     paths = _write(out, rows, load_before, args.load, time.monotonic() - started)
     print(text(rows))
     print(f"\n[sweep] {len(rows)} runs in {time.monotonic() - started:.0f} s; load average "
           f"{load_before:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} CPUs"
           + (" (plus the sweep's own background load)" if args.load else ""))
     print(f"[sweep] table: {paths[0]}, data: {paths[1]}")
-    return 0 if all(r.success for r in rows) else 1
+    status, why = exit_status(rows, unfinished)
+    if status:
+        print(f"demo sweep: {why}", file=sys.stderr)
+    return 130 if interrupted else status
 
 
 def _write(out: Path, rows: list[SweepRow], load_before: float, loaded: bool, wall_s: float

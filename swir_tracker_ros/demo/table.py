@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,10 +16,25 @@ from swir_tracker_ros.demo.analysis import RunSummary
 SUCCESS_IN_VIEW = 0.95
 
 
+def missed(s: RunSummary) -> list[str]:
+    """The success criteria run `s` missed, each as a short phrase (empty: the run succeeded): the run
+    completed, the target in view at the end and for >= SUCCESS_IN_VIEW of the run, 0 false-tracking
+    frames."""
+    out = []
+    if s.outcome != "completed":
+        out.append(f"run not completed ({s.outcome})")
+    if not s.in_view_at_end:
+        out.append("target out of view at the end")
+    if not s.in_view_fraction >= SUCCESS_IN_VIEW:  # also a NaN share (no frame scored)
+        out.append(f"in view {s.in_view_fraction:.1%} < {SUCCESS_IN_VIEW:.0%}")
+    if s.false_tracking_frames != 0:
+        out.append(f"{s.false_tracking_frames} false-tracking frames")
+    return out
+
+
 def succeeded(s: RunSummary) -> bool:
     """In view at the end and >= SUCCESS_IN_VIEW of the time, 0 false-tracking frames, run completed."""
-    return (s.outcome == "completed" and s.in_view_at_end and s.in_view_fraction >= SUCCESS_IN_VIEW
-            and s.false_tracking_frames == 0)
+    return not missed(s)
 
 
 @dataclass
@@ -34,6 +50,16 @@ class SweepRow:
     load_average: float  # 1-minute load average at the end of the run
     folder: str
     cpu_s: dict = field(default_factory=dict)  # CPU seconds of each process of the run
+    missed: list[str] = field(default_factory=list)  # the success criteria the run missed (`missed`)
+
+    @property
+    def name(self) -> str:
+        return run_name(self.scene, self.seed, self.ego, self.repeat)
+
+
+def run_name(scene: str, seed: int, ego: bool, repeat: int) -> str:
+    """A run as the exit line names it: scene, seed, and the ego setting / repeat when not the usual."""
+    return f"{scene} seed {seed}" + ("" if ego else " ego off") + (f" repeat {repeat}" if repeat > 1 else "")
 
 
 COLUMNS = (
@@ -92,4 +118,16 @@ def row_from(scene: str, seed: int, ego: bool, repeat: int, summary: RunSummary,
              exits: dict | None = None) -> SweepRow:
     cpu = {name: e.get("cpu_s") for name, e in (exits or {}).items()}
     return SweepRow(scene, seed, ego, repeat, summary.as_dict(), succeeded(summary), os.getloadavg()[0],
-                    str(folder), cpu)
+                    str(folder), cpu, missed(summary))
+
+
+def exit_status(rows: Sequence[SweepRow], unfinished: Sequence[str] = ()) -> tuple[int, str]:
+    """The exit status of `demo` / `demo sweep` from its runs: (0, "") when every run succeeded, else (1,
+    one line naming each failed run and the criteria it missed). `unfinished`: runs that left no records
+    (named with their error), failed too."""
+    failed = [f"{r.name} ({'; '.join(r.missed)})" for r in rows if not r.success]
+    failed += list(unfinished)
+    if not failed:
+        return 0, ""
+    total = len(rows) + len(unfinished)
+    return 1, f"{len(failed)} of {total} runs failed: " + ", ".join(failed)
