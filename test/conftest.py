@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from swir_tracker_ros.tracker import Tracker, TrackerParams
+
 REPO = Path(__file__).resolve().parent.parent
 SHARED = REPO.parent / "shared"
 SEQUENCES = SHARED / "data" / "sequences"
@@ -197,3 +199,17 @@ def context():
         yield ctx
     finally:
         rclpy.try_shutdown(context=ctx)
+
+
+
+class RecordingTracker(Tracker):
+    """A Tracker that keeps every TrackResult it returned (`results`)."""
+
+    def __init__(self, params: TrackerParams) -> None:
+        super().__init__(params)
+        self.results: list = []
+
+    def update(self, *args, **kwargs):
+        res = super().update(*args, **kwargs)
+        self.results.append(res)
+        return res

@@ -11,6 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from conftest import RecordingTracker
 
 from swir_tracker_ros.core.registry import make_filter
 from swir_tracker_ros.core.windows import scale_windows
@@ -278,19 +279,6 @@ def test_a_weak_frame_does_not_extrapolate_a_shrinking_size(sequences_dir: Path)
     assert abs(on - 1.0) < 0.005 and off < 0.96, (on, off)
 
 
-class _Recording(Tracker):
-    """A Tracker that keeps every TrackResult it returned."""
-
-    def __init__(self, params: TrackerParams) -> None:
-        super().__init__(params)
-        self.results: list = []
-
-    def update(self, *args, **kwargs):
-        res = super().update(*args, **kwargs)
-        self.results.append(res)
-        return res
-
-
 def test_a_gate_that_nothing_passes_freezes_the_model_unless_unconfident_frames_teach_it(
     sequences_dir: Path,
 ) -> None:
@@ -311,7 +299,7 @@ def test_a_gate_that_nothing_passes_freezes_the_model_unless_unconfident_frames_
         params = TrackerParams(sweep=None)
         params.update.unconfident_rate = rate
         params.coast.size_hold_peak_ratio, params.occlusion.reacquire_psr = 0.0, 0.0
-        trk = _Recording(params)
+        trk = RecordingTracker(params)
         stats = RunStats.of(run_source(src, lambda: trk), src.fps)
         later = [r for r in trk.results[20:] if r.state is TrackState.TRACKING]
         return (stats, sum(r.model_updated for r in trk.results[:10]), len(later),

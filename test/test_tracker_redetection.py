@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from conftest import RecordingTracker
 
 from swir_tracker_ros.core.kcf import KCFParams
 from swir_tracker_ros.core.registry import make_filter
@@ -268,23 +269,10 @@ def test_reacquisition_needs_a_psr_above_the_failure_bar() -> None:
     assert all(psr >= 12.0 for psr in on), on
 
 
-class _Recording(Tracker):
-    """A Tracker that keeps every TrackResult it returned."""
-
-    def __init__(self, params: TrackerParams) -> None:
-        super().__init__(params)
-        self.results: list = []
-
-    def update(self, *args, **kwargs):
-        res = super().update(*args, **kwargs)
-        self.results.append(res)
-        return res
-
-
 def sweep_run(name: str, start: str) -> tuple[RunStats, list]:
     """The default (long-loss sweep on) on synthetic `name` from SRE start `start`: scores, TrackResults."""
     src = open_source(f"synth:{name}")
-    trk = _Recording(TrackerParams())
+    trk = RecordingTracker(TrackerParams())
     run = run_starts(src, lambda: trk, starts=(start,))[start]
     return RunStats.of(run, src.fps), trk.results
 
