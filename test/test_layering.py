@@ -28,7 +28,9 @@ ALLOWED: dict[str, set[str]] = {
     "configs": BASE | {"core", "policies", "tracker_params"},  # named configurations
     "track": BASE | {"kalman", "core", "policies", "tracker_params"},  # the per-track state of `tracker`
     "tracker": BASE | {"kalman", "core", "policies", "tracker_params", "configs", "track"},
-    "acquisition": BASE | {"kalman"},
+    # the learned detector runs in the core's one runtime, found by its model locator, on frames conditioned
+    # as the tracker's (core/siamese/network.py, locator.py, core/conditioning.py)
+    "acquisition": BASE | {"kalman", "core"},
     "pelco": BASE,
     "scene": BASE | {"acquisition"},  # scene.crowd hands out acquisition Detections (simulation -> core)
     "msg_adapters": {"types", "topics"},  # one way: the adapters know the public value types, not the reverse
