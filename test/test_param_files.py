@@ -83,7 +83,8 @@ def _reachable(cls: type) -> set[type]:
 
 
 def _section_classes(pf) -> list[type]:
-    return [c for _, classes, _ in pf.sections
+    """The params classes of a file's sections (a section may hold an instance: a named configuration)."""
+    return [c if isinstance(c, type) else type(c) for _, classes, _ in pf.sections
             for c in (classes if isinstance(classes, tuple) else (classes,))]
 
 
