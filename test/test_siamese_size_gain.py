@@ -3,7 +3,7 @@
 measured on the template's frame, and the size learning rate scaled by g^p. The maths on known numbers; the
 tracker on a synthetic point-like thermal target (a small hot blob on a flat sky, whose regressed size
 mostly echoes the searched size): its g is the gain of its own two test searches, its lr is the authors'
-rate times g^p, and p = 0 runs no test and keeps the authors' rate."""
+rate times min(1, g / g_ref)^p, and p = 0 runs no test and keeps the authors' rate."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.siamese.maps import regression_gain
+from swir_tracker_ros.core.siamese.maps import gain_factor, regression_gain
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
 from swir_tracker_ros.types import Box
@@ -35,6 +35,13 @@ def test_gain_is_one_minus_the_echo_slope() -> None:
         regression_gain((10.0, 20.0), (0.0, 20.0))
 
 
+def test_gain_factor_damps_only_below_the_reference() -> None:
+    assert gain_factor(0.1, 0.5, 2.0) == pytest.approx(0.04)  # (0.1 / 0.5)^2
+    assert gain_factor(0.7, 0.5, 2.0) == 1.0  # at or above the reference: the authors' rate
+    assert gain_factor(0.1, 1.0, 1.0) == pytest.approx(0.1)  # reference 1: g^p
+    assert gain_factor(0.0, 0.5, 0.0) == 1.0  # power 0: off, whatever the gain
+
+
 def _sky(cx: float, cy: float) -> np.ndarray:
     """A 320x256 8-bit frame: flat sky, a little noise, a hot Gaussian blob (sigma 2 px) at (cx, cy)."""
     rng = np.random.default_rng(7)
@@ -47,7 +54,7 @@ def _sky(cx: float, cy: float) -> np.ndarray:
 def test_small_target_gain_scales_the_size_rate() -> None:
     box = Box.from_center(160.0, 128.0, 14.0, 14.0)  # a loose 14 px box around a ~5 px core
     frame = _sky(160.0, 128.0)
-    trk = SiameseTracker(SiameseParams(version="v3", size_gain_power=2.0))
+    trk = SiameseTracker(SiameseParams(version="v3", size_gain_power=2.0, size_gain_ref=0.5))
     trk.init(frame, box)
     f = trk.params.size_test
     lo, hi = (trk.search(frame, box.cx, box.cy, box.w * k, box.h * k).box for k in (1.0 / f, f))
@@ -57,7 +64,7 @@ def test_small_target_gain_scales_the_size_rate() -> None:
     nxt = _sky(161.0, 128.5)
     det = trk.search(nxt, *trk.center, *trk.size)
     c = trk.constants
-    assert det.lr == pytest.approx(det.penalty * det.score * c.size_lr * g ** 2)
+    assert det.lr == pytest.approx(det.penalty * det.score * c.size_lr * min(1.0, g / 0.5) ** 2)
     w = trk.size[0]
     assert det.smoothed.w == pytest.approx(w + det.lr * (det.box.w - w))  # size moves by that rate
     # p = 0 (the default): no test, g = 1, the authors' rate on the same search

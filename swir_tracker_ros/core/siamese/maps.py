@@ -112,6 +112,12 @@ def regression_gain(searched: tuple[float, float], regressed: tuple[float, float
     return min(1.0, max(0.0, 1.0 - slope))
 
 
+def gain_factor(gain: float, ref: float, power: float) -> float:
+    """The size learning rate's factor of a regression of gain g (issue 52): min(1, g / ref)^power; 1 for
+    power 0 (the authors' rate)."""
+    return 1.0 if power == 0.0 else min(1.0, gain / ref) ** power
+
+
 def clip_state(cx: float, cy: float, w: float, h: float, width: int, height: int,
                min_size: float) -> tuple[float, float, float, float]:
     """Centre kept in the image, each side in [min_size, image side] (the authors' _bbox_clip)."""

@@ -40,6 +40,7 @@ from swir_tracker_ros.core.siamese.maps import (
     clip_state,
     cosine_window,
     decode_ltrb,
+    gain_factor,
     point_grid,
     regression_gain,
     size_update,
@@ -223,7 +224,8 @@ class SiameseTracker:
         penalty = change_penalty(boxes, w * scale, h * scale, c.penalty_k)
         pmap = window_mix(penalty * score, window, c.window_influence)
         row, col = np.unravel_index(int(np.argmax(pmap)), pmap.shape)
-        lr = float(penalty[row, col] * score[row, col] * c.size_lr * self.size_gain ** p.size_gain_power)
+        lr = float(penalty[row, col] * score[row, col] * c.size_lr
+                   * gain_factor(self.size_gain, p.size_gain_ref, p.size_gain_power))
         bx, by = cx + boxes.cx[row, col] / scale, cy + boxes.cy[row, col] / scale
         bw, bh = boxes.w[row, col] / scale, boxes.h[row, col] / scale
         sw, sh = (size_update_twice if self.lighttrack else size_update)(w, h, bw, bh, lr)
