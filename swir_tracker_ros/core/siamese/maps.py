@@ -12,6 +12,7 @@ All maps are (S, S) arrays, row = y, column = x, in search-crop pixels relative 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,6 +96,26 @@ def size_update_twice(w: float, h: float, new_w: float, new_h: float, lr: float)
     size enters with weight lr^2."""
     bw, bh = size_update(w, h, new_w, new_h, lr)
     return size_update(w, h, bw, bh, lr)
+
+
+def regression_gain(searched: tuple[float, float], regressed: tuple[float, float]) -> float:
+    """How much of a size mismatch the regression measures (ours, issue 52): the target of known size T
+    searched at the wrong sizes a_1 < a_2 (`searched`, sqrt(w h) each) gives boxes of sizes r_1, r_2
+    (`regressed`). In log size the regression is log r = s log a + (1 - s) log T + b: s = 1 echoes the
+    searched size (the regressed box is the searched box, whatever the target), s = 0 measures the target.
+    The gain is g = 1 - s = 1 - log(r_2 / r_1) / log(a_2 / a_1), kept in [0, 1]."""
+    (a1, a2), (r1, r2) = searched, regressed
+    if not (0.0 < a1 < a2 and r1 > 0.0 and r2 > 0.0):
+        raise ValueError(f"sizes must be positive with searched[0] < searched[1], got {searched}, "
+                         f"{regressed}")
+    slope = math.log(r2 / r1) / math.log(a2 / a1)
+    return min(1.0, max(0.0, 1.0 - slope))
+
+
+def gain_factor(gain: float, ref: float, power: float) -> float:
+    """The size learning rate's factor of a regression of gain g (issue 52): min(1, g / ref)^power; 1 for
+    power 0 (the authors' rate)."""
+    return 1.0 if power == 0.0 else min(1.0, gain / ref) ** power
 
 
 def clip_state(cx: float, cy: float, w: float, h: float, width: int, height: int,

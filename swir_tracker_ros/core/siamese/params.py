@@ -90,6 +90,18 @@ class SiameseParams(FilterParams):
         True, "crops centred exactly on the float centre at the exact scale (one affine warp), the box "
               "decoded from that centre; False: the authors' whole-pixel windows of rounded side, decoded "
               "from the state (their trajectories exactly; a 0.5-1.5 px crop offset)")
+    size_gain_power: float = param(
+        0.0, "(ours, issue 52) exponent p of the size learning rate's factor min(1, g / size_gain_ref)^p, "
+             "g the regression gain measured on each template's frame (maps.regression_gain: that frame "
+             "searched at the template box times 1/size_test and size_test; 1 measures the size, 0 echoes "
+             "the searched size); 0: off, no test, the authors' rate (docs/siamese.md \"Size from a "
+             "low-gain regression\")", 0.0, 8.0)
+    size_gain_ref: float = param(
+        0.5, "gain from which the authors' size rate applies unchanged (size_gain_power): about the median "
+             "gain of the visible development set's targets (0.47 for v3)", 0.01, 1.0)
+    size_test: float = param(
+        1.4142, "size factor of that test: the template's frame is searched at 1/size_test and size_test "
+                "times the template box (two searches per template)", 1.05, 4.0)
     min_size: float = param(10.0, "smallest box side (px) after clipping (authors' _bbox_clip)", 1.0, 1e4)
     conditioning: ConditioningConfig = nested(
         ConditioningConfig, "how non-8-bit frames become the 8-bit gray image fed to the network")

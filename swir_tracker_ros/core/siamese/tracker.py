@@ -18,6 +18,7 @@ three channels of the network.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -39,7 +40,9 @@ from swir_tracker_ros.core.siamese.maps import (
     clip_state,
     cosine_window,
     decode_ltrb,
+    gain_factor,
     point_grid,
+    regression_gain,
     size_update,
     size_update_twice,
     window_mix,
@@ -119,6 +122,7 @@ class SiameseTracker:
         self._fill: np.ndarray | None = None
         self.center: tuple[float, float] = (0.0, 0.0)
         self.size: tuple[float, float] = (0.0, 0.0)
+        self.size_gain = 1.0  # regression gain g of the template's size test (1 without the test)
 
     # --- frames ------------------------------------------------------------------------------------------
 
@@ -162,6 +166,15 @@ class SiameseTracker:
         else:
             patch = cut(img, crop_window(box.cx, box.cy, s_z, ex), self._fill)
         self.net.set_exemplar(patch)
+        self.size_gain = self._size_test(img, box) if p.size_gain_power > 0.0 else 1.0
+
+    def _size_test(self, img: np.ndarray, box: Box) -> float:
+        """The regression gain g on the template's own frame, where the target's size is known: the box
+        searched at 1/size_test and size_test times its size (maps.regression_gain)."""
+        f = self.params.size_test
+        sizes = [self._search(img, box.cx, box.cy, box.w * k, box.h * k).box for k in (1.0 / f, f)]
+        a = math.sqrt(box.w * box.h)
+        return regression_gain((a / f, a * f), tuple(math.sqrt(b.w * b.h) for b in sizes))
 
     def init(self, frame: np.ndarray, box: Box, bit_depth: int | None = None) -> None:
         """Start tracking `box` in `frame`: exemplar features and state (centre, size)."""
@@ -211,7 +224,8 @@ class SiameseTracker:
         penalty = change_penalty(boxes, w * scale, h * scale, c.penalty_k)
         pmap = window_mix(penalty * score, window, c.window_influence)
         row, col = np.unravel_index(int(np.argmax(pmap)), pmap.shape)
-        lr = float(penalty[row, col] * score[row, col] * c.size_lr)
+        lr = float(penalty[row, col] * score[row, col] * c.size_lr
+                   * gain_factor(self.size_gain, p.size_gain_ref, p.size_gain_power))
         bx, by = cx + boxes.cx[row, col] / scale, cy + boxes.cy[row, col] / scale
         bw, bh = boxes.w[row, col] / scale, boxes.h[row, col] / scale
         sw, sh = (size_update_twice if self.lighttrack else size_update)(w, h, bw, bh, lr)
