@@ -22,20 +22,14 @@ SE 0.024) and within TrackerNano's speed; LightTrack-M alone is +0.018 (SE 0.017
 slower per frame (docs/experiments.md, issue 46)."""
 
 
-SIZE_GAIN_POWER = 3.0
-"""`SiameseParams.size_gain_power` of the network-led track: a target whose size regression barely answers
-(small thermal targets, gain below `size_gain_ref` 0.5) keeps its size; thermal corpus +0.097 (3.4 SE) over
-`measured`, the visible development set -0.007 (0.6 SE) (docs/experiments.md "Issue 52: small thermal
-targets")."""
-
 COAST_FRAMES = 25
 """Frames a hidden target's prediction keeps the trail's velocity before it holds (1 s at 25 Hz)."""
 
 
 def params(base: str | None = None) -> TrackerParams:
     fp = base_params(base, default="siamese")
-    if isinstance(fp, SiameseParams):  # the size rate follows the regression's gain (docs/siamese.md)
-        fp = replace(fp, version=NETWORK, size_gain_power=SIZE_GAIN_POWER)
+    if isinstance(fp, SiameseParams):
+        fp = replace(fp, version=NETWORK)
     motion = MotionParams(adaptive_threshold=False, size_velocity=False)  # judges; the network sizes
     return TrackerParams(base=fp, motion=motion, memory=None, sweep=None, rejected=None,
                          lead=LeadParams(), coast=CoastParams(frames=COAST_FRAMES), presmooth=0.0)
