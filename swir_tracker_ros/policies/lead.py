@@ -11,10 +11,15 @@ One pipeline per frame (`step`), the stages of `Tracker._step` in the network's 
    `SiameseTracker`); while the target is gone, also the crop at the prediction and the next crops of a
    lattice around it (`_redetect`);
 3. judge: while tracking, the appearance verdict (`GoneVerdict`) and the motion gate (`off_path`: the box
-   left the predicted path by more than `jump_gate` target sizes); while gone, a candidate resumes only when
-   its appearance passes the stricter resume bar and its place is one the motion allows (`resume_radius`
-   plus `resume_growth` target sizes a missed frame around the prediction), or, after `long_loss` frames, when
-   it is a strong match (`strong_ratio` x the target's typical PSR) anywhere;
+   left the predicted path by more than `jump_gate` target sizes) and the look-alike guard (a box that left
+   the trail's motion reference is taken back by an answer at the reference: `_take_back`); while gone, a
+   candidate resumes only when its appearance passes the stricter resume bar, its size is the target's
+   (`resume_size`) and its place is one the motion allows (`resume_radius` plus, per missed frame,
+   `resume_growth` and `resume_speed` x the target's speed, around the prediction), or, after `long_loss`
+   frames, when it is a strong match (`strong_ratio` x the target's typical PSR) anywhere; one away from the
+   prediction must show itself on two frames (`_confirmed`), and while the network's own answer holds the
+   predicted place no other crop may take the track (`_holds`); distances are in target sizes of at least
+   `gate_size` pixels;
 4. update the motion: only an accepted box updates the Kalman filter (`MotionFilter.update`; a resume far
    from the prediction restarts it: `MotionFilter.jump`); a missed frame coasts it (`CoastModel`: the trail's
    velocity first, then held after `coast.frames`);
