@@ -2,7 +2,7 @@
 """`TrackerParams`: the tracker's parameters, one Params dataclass per layer and policy it composes.
 
 The defaults are our correlation-filter configuration (`measured`, swir_tracker_ros/configs/measured.py);
-the papers' configurations and the network-led default (`lead`, configs/lead.py) build theirs in plain code
+the papers' configurations and the network-led one (`lead`, configs/lead.py) build theirs in plain code
 from these, leaving policies out (None) or setting their own values. ROS names: `tracker.<field>.<subfield>`
 (`tracker.base.padding`, `tracker.memory.ratio`).
 """

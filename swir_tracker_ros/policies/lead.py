@@ -208,8 +208,6 @@ class NetworkLead:
                     det, c = best, k
                     self.verdict.judge_cues(c)  # the verdict's own state: found again
                     resumed, gone = True, False
-                else:
-                    gone = True
             else:
                 self._pending = None
         box = det.smoothed  # the network follows its answer, judged or not (as it tracks alone), but while

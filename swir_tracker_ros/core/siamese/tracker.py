@@ -9,8 +9,10 @@ returns the box, the best score and the maps; `search(frame, cx, cy, w, h)` is t
 around any centre and target size (re-detection windows), without touching the state. Per search (SiamRPN
 Sec. 4.3 as NanoTrack's tracker does it): score = softmax foreground probability, per-point boxes from the
 ltrb distances, penalty = exp(-(r_c s_c - 1) k), penalised map = (1 - w_i) penalty * score + w_i cosine,
-best point = its argmax, lr = penalty * score * size_lr, new size = (1 - lr) old + lr regressed (LightTrack
-blends twice: (1 - lr^2) old + lr^2 regressed), clipped to the image. LightTrack's score is the sigmoid
+best point = its argmax, lr = penalty * score * size_lr (ours: times min(1, g / size_gain_ref) to the
+power size_gain_power, g the regression gain measured on the template's frame; power 0, the default, is the
+authors' rate), new size = (1 - lr) old + lr regressed (LightTrack blends twice: (1 - lr^2) old + lr^2
+regressed), clipped to the image. LightTrack's score is the sigmoid
 its head applies, its whole-pixel crops those of its `get_subwindow_tracking` (exemplar side round(s_z)).
 One-channel 8/16-bit frames go through the tracker's frame conditioning to 8 bits and are replicated to the
 three channels of the network.
