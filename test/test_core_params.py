@@ -43,12 +43,12 @@ def _params_objects(obj: object) -> list[object]:
 
 
 def test_the_papers_pipelines_and_the_default_are_named_configurations() -> None:
-    assert set(PAPERS) | {"measured", "eco", "siamese", "fused", "lead"} == set(CONFIGURATIONS)
+    assert set(PAPERS) | {"measured", "eco", "siamese", "fused", "lead", "judged"} == set(CONFIGURATIONS)
     assert TrackerParams() == configuration("measured")  # the dataclass defaults: the CF pipeline's layers
     assert configuration("lead").lead is not None and DEFAULT_CONFIGURATION in CONFIGURATIONS
     for name in CONFIGURATIONS:
         for base in (None, *BASES):
-            if name == "lead" and base not in (None, "siamese"):  # the network leads, no other filter
+            if name in ("lead", "judged") and base not in (None, "siamese"):  # the network leads alone
                 with pytest.raises(ParameterError, match="lead"):
                     configuration(name, base)
                 continue

@@ -19,6 +19,7 @@ from swir_tracker_ros.configs import (
     cf,
     eco,
     fused,
+    judged,
     kalman,
     lead,
     measured,
@@ -33,7 +34,7 @@ from swir_tracker_ros.paramfield import param
 from swir_tracker_ros.tracker_params import TrackerParams
 
 _MODULES: tuple[ModuleType, ...] = (cf, kalman, robust, robust_adaptive, robust_adaptive_r, measured, eco,
-                                  siamese, fused, lead)
+                                  siamese, fused, lead, judged)
 CONFIGURATIONS: dict[str, Callable[[str | None], TrackerParams]] = {
     m.__name__.rsplit(".", 1)[-1]: m.params for m in _MODULES
 }
@@ -70,7 +71,8 @@ class ConfigurationChoice:
         DEFAULT_CONFIGURATION,
         "named tracker configuration (swir_tracker_ros/configs/): measured (the default: our correlation-"
         "filter pipeline, no model files), lead (the Siamese network leads, judged by its motion; needs the "
-        "model files of `make models`), the papers' pipelines",
+        "model files of `make models`), judged (lead with a second network's opinion and a judge), the "
+        "papers' pipelines",
         choices=tuple(CONFIGURATIONS),
         read_only=True,
     )

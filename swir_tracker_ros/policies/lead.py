@@ -36,7 +36,7 @@ area is covered by more crops of the same size (each ~3-8 ms) rather than by one
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -47,6 +47,7 @@ from swir_tracker_ros.policies.coast import CoastModel
 from swir_tracker_ros.policies.gone import GoneCues, GoneParams, GoneVerdict, cues
 from swir_tracker_ros.policies.lookalike import LookalikeGuard
 from swir_tracker_ros.policies.motion import MotionFilter
+from swir_tracker_ros.policies.second import Opinion, SecondOpinion, SecondParams
 from swir_tracker_ros.policies.trail import Trail
 from swir_tracker_ros.types import Box, SearchMode, TrackState
 
@@ -93,6 +94,9 @@ class LeadParams:
     strong_ratio: float = param(
         0.1, "a strong match: PSR at least this x the target's typical tracked PSR (and the resume bar)",
         0.0, 10.0)
+    second: SecondParams | None = nested(
+        lambda: None, "(issue 53) a second network's opinion and the judge that picks whose box stands "
+                      "(policies/second.py); none: the leader alone")
 
 
 def coverage(w: float, h: float, tracker: SiameseTracker) -> float:
@@ -160,10 +164,14 @@ class NetworkLead:
         self._tiles: list[tuple[float, float]] = []  # the re-detection lattice still to search
         self._speed = 0.0  # the target's speed when it was lost, target sizes a frame
         self._pending: Box | None = None  # a candidate away from the prediction, to be confirmed
+        self.second = SecondOpinion(p.second, tracker) if p.second is not None else None
+        self.opinion: Opinion | None = None  # what the second said on this frame (None: it did not look)
 
     def start(self, frame: np.ndarray, box: Box, bit_depth: int | None) -> None:
         """The network's template and state from the start box (input pixels)."""
         self.net.init(frame, box, bit_depth)
+        if self.second is not None:
+            self.second.start(frame, box, bit_depth)
         self.verdict.reset()
         self.box, self.missed, self._tiles = box, 0, []
 
@@ -183,6 +191,21 @@ class NetworkLead:
         c = cues(det)
         size = max(math.sqrt(self.box.w * self.box.h), self.p.gate_size)  # the motion gates' unit
         shown: tuple[Box, ...] = (_crop(det),)
+        self.opinion = None
+        if self.second is not None:
+            self.second.shift(dx, dy)
+            looks = self.missed == 0 or self.second.p.while_gone
+            if looks and self.second.due(c):  # 2b. the second opinion, and the judge
+                self.opinion = self.second.look(image, det, c, lambda b: off_path(b, pred, size))
+                shown += (_crop(self.opinion.det),)
+                if self.opinion.stands and self._departs(self.opinion.det.smoothed, guard):
+                    self.opinion = replace(self.opinion, stands=False)  # the motion vetoes a look-alike
+                follows = self.missed == 0 and self.second.p.lead_follows
+                if self.opinion.stands and follows:  # the leader looks there and takes that answer
+                    b = self.opinion.det.smoothed
+                    det = self.net.search(image, b.cx, b.cy, *self.net.size)
+                    c = cues(det)
+                    shown += (_crop(det),)
         mode = SearchMode.NORMAL
         resumed, gone, velocity = False, True, None
         if self.missed == 0:  # 3. judge a tracked frame: appearance, then motion
@@ -213,6 +236,8 @@ class NetworkLead:
         box = det.smoothed  # the network follows its answer, judged or not (as it tracks alone), but while
         self.net.center = box.center  # the target is gone its size stays the last accepted one (it would
         self.net.size = (box.w, box.h) if not gone else (self.box.w, self.box.h)  # grow onto an occluder)
+        if not gone and self.opinion is not None:  # the standing box; two that agree: their blend
+            box = self.second.joined(box, self.opinion)  # type: ignore[union-attr]
         if not gone:  # 4. an accepted box updates the motion; 5. finish
             z, k = motion.measurement(box.cx, box.cy, box.w, box.h), motion.threshold(c.score)
             if resumed and off_path(box, pred, size) > self._radius():
@@ -222,6 +247,10 @@ class NetworkLead:
             if velocity is not None:  # taken back: the reference's motion, from before the look-alike
                 motion.set_velocity(*velocity)
             trail.remember(box)
+            if resumed and self.second is not None:
+                self.second.move(box)  # found again: the second looks there too
+            elif self.second is not None and self.opinion is None:  # between looks: it moves with the track
+                self.second.shift(box.cx - self.box.cx, box.cy - self.box.cy)
             self.box, self.missed, self._tiles, self._pending = box, 0, [], None
             return LeadFrame(box, TrackState.TRACKING, c, mode, shown, None)
         if self.missed == 0:
@@ -230,6 +259,8 @@ class NetworkLead:
         self.missed += 1
         coast.redetecting(motion, self.missed)
         state = TrackState.OCCLUDED if self.missed <= self.p.lost_after else TrackState.LOST
+        if self.opinion is not None and self.opinion.stands:  # the judge prefers the second's answer
+            return LeadFrame(self.opinion.det.smoothed, state, c, mode, shown, pred)
         on_path = off_path(box, pred, size) <= self.p.resume_radius  # its answer, else the prediction
         return LeadFrame(box if on_path else pred, state, c, mode, shown, pred)
 
@@ -250,6 +281,14 @@ class NetworkLead:
             guard.taken_back()
             return alt, k, (ref[2], ref[3])
         return None
+
+    def _departs(self, box: Box, guard: LookalikeGuard | None) -> bool:
+        """A box the look-alike guard would not let the track take: its centre lies further than the guard's
+        `distance` from the trail's motion reference (box widths and heights of the last accepted box)."""
+        ref = guard.reference() if guard is not None else None
+        if ref is None:
+            return False
+        return guard.apart(box.cx, box.cy, ref[0], ref[1], self.box.w, self.box.h) > guard.p.distance
 
     def _radius(self) -> float:
         """The resume radius in target sizes after `missed` frames (LeadParams)."""
