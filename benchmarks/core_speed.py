@@ -34,6 +34,7 @@ import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -530,6 +531,14 @@ def time_siamese(n: int, seq: Path = SIAMESE_SEQUENCE) -> dict:
         if redetect:
             trk._track.lead.verdict = AlwaysGone()
         out[key] = timed(trk.update, frames[1:])
+    # configuration `judged` (policies/second.py): LightTrack-M's opinion on every frame, and on every 4th
+    # frame plus the frames whose leader PSR is below 6.4 (the schedule of `judged_sparse`)
+    for key, every, doubt in (("judged", 1, 0.0), ("judged_sparse", 4, 6.4)):
+        cp = configuration("judged")
+        cp = replace(cp, lead=replace(cp.lead, second=replace(cp.lead.second, every=every, doubt_psr=doubt)))
+        trk = Tracker(cp)
+        trk.init(frames[0], box)
+        out[key] = timed(trk.update, frames[1:])
     p = cv2.TrackerNano_Params()
     p.backbone, p.neckhead = str(locate(VERSIONS["v2"].backbone)), str(locate(VERSIONS["v2"].head))
     nano = cv2.TrackerNano_create(p)
@@ -544,6 +553,8 @@ SIAMESE_NAMES = {"siamese_v2": "ours Siamese v2 (core/siamese)",
                  "fused": "ours, configuration fused (ECO + v2)",
                  "lead": "ours, configuration lead (tracking)",
                  "lead_redetect": "ours, configuration lead (re-detection)",
+                 "judged": "ours, configuration judged (second every frame)",
+                 "judged_sparse": "ours, judged, second every 4th + doubt",
                  "opencv_nano": "OpenCV TrackerNano (v2 weights)"}
 
 
@@ -557,7 +568,7 @@ def print_siamese(res: dict, frames: int) -> None:
         r = res[key]
         print(f"  {label:46s} {r['fps']:7.1f} {r['cpu_fps']:8.1f} {r['p50_ms']:8.2f} {r['p95_ms']:8.2f} "
               f"{r['max_ms']:8.2f}")
-    for key in ("siamese_v2", "siamese_v3", "fused", "lead", "lead_redetect"):
+    for key in ("siamese_v2", "siamese_v3", "fused", "lead", "lead_redetect", "judged", "judged_sparse"):
         print(f"  ratio {key} / TrackerNano: {res[key]['fps'] / res['opencv_nano']['fps']:.2f} "
               f"(cpu {res[key]['cpu_fps'] / res['opencv_nano']['cpu_fps']:.2f})")
 
