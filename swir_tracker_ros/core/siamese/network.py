@@ -23,7 +23,7 @@ wrong result for LightTrack-M's backbone. No PyTorch at run time.
 
 Graph optimisation: onnxruntime's default level (all) is used; it measured fastest for every model (about
 3x the disabled/basic/extended levels, docs/siamese.md "Faster networks"). Precision: the heads in float32 or
-int8 (`SiameseParams.precision`; the int8 heads made from the float ones, core/siamese/quantise.py).
+int8 (`SiameseParams.precision`; the int8 heads made from the float ones, core/siamese/int8.py).
 
 The exemplar features are computed once per template (`set_exemplar`), the search features on every search.
 """

@@ -60,7 +60,7 @@ class VersionConstants:
 
     def files_for(self, precision: str) -> tuple[str, ...]:
         """The pinned files of `precision` (PRECISIONS): the float backbone always; "int8": the int8 heads
-        made from the float ones (core/siamese/quantise.py)."""
+        made from the float ones (core/siamese/int8.py, harness/quantise.py)."""
         if precision not in PRECISIONS:
             raise ParameterError(f"precision {precision!r}; choose from {', '.join(PRECISIONS)}")
         if precision == "float32":

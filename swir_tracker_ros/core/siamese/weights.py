@@ -133,27 +133,13 @@ DETECTOR_PINNED: tuple[PinnedFile, ...] = (  # optional: installed when obtainab
 )
 
 
-MADE_PINNED: tuple[PinnedFile, ...] = (  # made here from the float heads (core/siamese/quantise.py)
-    PinnedFile("v2/nanotrack_head_sim_int8.onnx", "",
-               "b16a2de7196e7b099e3eabd6e25b48a3b7d9ed9814b3078cec45dc9dded464c5", NANOTRACK),
-    PinnedFile("v3/nanotrack_head_int8.onnx", "",
-               "c5c38a20b5825127d0c82282d4d91b75bcc44cbde64bbc1e93200d0eae90b725", NANOTRACK),
-    PinnedFile("lighttrack/lighttrack_head_16_int8.onnx", "",
-               "6486d94a8fd49e4a5c16b89dbf48fca8c9298b79c22474d6ef073b7677bd297b", LIGHTTRACK_IR),
-    PinnedFile("lighttrack/lighttrack_head_18_int8.onnx", "",
-               "912bd25a0b6de914a36ab7a974161e1d5ceef1aed522ca524ccb673520cc302b", LIGHTTRACK_IR),
-)
-"""The int8 heads (`SiameseParams.precision` "int8"): made by `make models` from the verified float heads with
-onnxruntime's quantisation tools (core/siamese/quantise.py: calibration frames, recipe), not downloaded."""
-
-
 class FetchError(Exception):
     """A model file could not be copied, downloaded or converted, or its content is not the pinned one."""
 
 
 def pinned(path: str) -> PinnedFile:
     """The pin of `path` (e.g. "v2/nanotrack_head_sim.onnx"); KeyError if it is not pinned."""
-    for f in (*PINNED, *DETECTOR_PINNED, *MADE_PINNED):
+    for f in (*PINNED, *DETECTOR_PINNED):
         if f.path == path:
             return f
     raise KeyError(path)

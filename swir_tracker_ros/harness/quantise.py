@@ -1,37 +1,21 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The int8 heads (`SiameseParams.precision = "int8"`): made by onnxruntime's quantisation tools from the
-pinned float heads, calibrated on named development frames, checked against their own sha256 (weights.py
-`MADE_PINNED`).
+"""Make the int8 heads (`SiameseParams.precision` "int8"; core/siamese/int8.py: recipe and pins) from the
+verified float files, calibrated on named development frames; `make models` runs it after the float files.
 
-Only the heads are quantised: measured (benchmarks/network_speed.py, docs/siamese.md "Faster networks"), an
-int8 backbone is slower than the float one on this CPU for all three networks (onnxruntime's float kernels
-fuse Conv + activation in the blocked NCHWc layout; the int8 graph keeps the swish / SE blocks as separate
-QLinear ops) and its features are far from float's (score-map correlation 0.4-0.7), where the int8 heads run
-in half the time with their maps close to float's.
+Calibration pairs: for each sequence of `CALIBRATION` (../shared/data/sequences), the exemplar crop of frame
+1's ground-truth box and the search crops of frames `CALIBRATION_FRAMES`, each centred on the previous
+frame's ground-truth box and scaled from its size, cut exactly as `SiameseTracker` cuts them (SiamFC context
+0.5, sub-pixel crops, the first frame's mean as padding; LightTrack-M: every search crop at 256 and at 288
+px, one per head). The head's calibration inputs are those crops' float backbone features (the verified
+float backbone, one thread), each search paired with its sequence's exemplar. Each made file is checked
+against its pin before it is put in place.
 
-Recipe (static QDQ, per-channel int8 weights, uint8 activations, MinMax ranges):
-
-1. calibration pairs: for each sequence of `CALIBRATION` (../shared/data/sequences), the exemplar crop of
-   frame 1's ground-truth box and the search crops of frames `CALIBRATION_FRAMES`, each centred on the
-   previous frame's ground-truth box and scaled from its size, cut exactly as `SiameseTracker` cuts them
-   (SiamFC context 0.5, sub-pixel crops, the first frame's mean as padding; LightTrack-M: every search crop
-   at 256 and at 288 px, one per head);
-2. the head's inputs are those crops' float backbone features (the verified float backbone, one thread);
-3. `quant_pre_process` (onnx shape inference, onnxruntime's basic graph optimisation: LightTrack-M's fp16
-   weights folded to float32), onnxruntime's MinMax calibration, each range widened outward to 7
-   significant bits (`rounded_range`: a last-bit difference of float features on another CPU leaves the
-   ranges, and so the file's bytes, unchanged), `quantize_static` from those ranges.
-
-With the same frames and onnxruntime 1.32.0 the bytes are the same on every run (checked by making the files
-twice; the pin in weights.py is their sha256).
-
-    python -m swir_tracker_ros.core.siamese.quantise --dest DIR [--sequences DIR] [--optional]
+    python -m swir_tracker_ros.harness.quantise [--dest DIR] [--sequences DIR] [--optional] [--no-check]
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import tempfile
@@ -39,7 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from swir_tracker_ros.core.siamese.weights import MADE_PINNED, SHARE_SUBDIR, PinnedFile, sha256_of
+from swir_tracker_ros.core.siamese.crops import context_side, cut_subpixel
+from swir_tracker_ros.core.siamese.int8 import MADE_PINNED, quantise_model
+from swir_tracker_ros.core.siamese.network import network
+from swir_tracker_ros.core.siamese.params import VERSIONS
+from swir_tracker_ros.core.siamese.weights import SHARE_SUBDIR, PinnedFile, sha256_of
+from swir_tracker_ros.errors import ModelError
+from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
 
 CALIBRATION: tuple[str, ...] = (
     "antiuav_irclip04", "dtb70_mountainbike6", "otb_bolt", "otb_crossing", "otb_skating1", "ptbtir_airplane",
@@ -48,30 +38,15 @@ CALIBRATION: tuple[str, ...] = (
 """Calibration sequences of ../shared/data/sequences: thermal and visible, large and small targets."""
 CALIBRATION_FRAMES: tuple[int, ...] = (5, 10, 15, 20, 25, 30)
 """0-based frames searched per calibration sequence (each around the previous frame's ground truth)."""
-SIGNIFICANT_BITS = 7
-"""Bits kept of each calibrated range end (`rounded_range`)."""
-DEFAULT_SEQUENCES = Path(__file__).resolve().parents[4] / "shared" / "data" / "sequences"
+DEFAULT_SEQUENCES = Path(__file__).resolve().parents[3] / "shared" / "data" / "sequences"
 
 
 class QuantiseError(Exception):
     """An int8 head cannot be made (no calibration frames, no original) or is not the pinned one."""
 
 
-def rounded_range(lo: float, hi: float, bits: int = SIGNIFICANT_BITS) -> tuple[float, float]:
-    """(lo, hi) widened outward to the nearest values with `bits` significant bits (0 stays 0)."""
-    def out(v: float, up: bool) -> float:
-        if v == 0.0 or not math.isfinite(v):
-            return v
-        step = 2.0 ** (math.floor(math.log2(abs(v))) - bits + 1)
-        return (math.ceil(v / step) if up else math.floor(v / step)) * step
-    return out(float(lo), False), out(float(hi), True)
-
-
 def calibration_crops(version: str, sequences: Path) -> tuple[list[np.ndarray], list[list[np.ndarray]]]:
     """(exemplar crops, search crops per instance size) of the calibration sequences (module docstring)."""
-    from swir_tracker_ros.core.siamese.crops import context_side, cut_subpixel
-    from swir_tracker_ros.core.siamese.params import VERSIONS
-    from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
 
     c = VERSIONS[version]
     sizes = [s for s in (c.instance_size, c.big_instance_size) if s]
@@ -102,8 +77,6 @@ def calibration_crops(version: str, sequences: Path) -> tuple[list[np.ndarray], 
 def head_feeds(version: str, originals: Path, sequences: Path) -> dict[str, list[dict[str, np.ndarray]]]:
     """{float head path under the model directory: calibration feeds} of a version: the float backbone's
     features of the calibration crops, each search paired with its sequence's exemplar."""
-    from swir_tracker_ros.core.siamese.network import network
-    from swir_tracker_ros.core.siamese.params import VERSIONS
 
     c = VERSIONS[version]
     net = network(c, originals)
@@ -121,47 +94,8 @@ def head_feeds(version: str, originals: Path, sequences: Path) -> dict[str, list
     return out
 
 
-class _Feeds:
-    """onnxruntime's CalibrationDataReader over a list of feeds."""
-
-    def __init__(self, feeds: list[dict[str, np.ndarray]]) -> None:
-        self._it = iter(feeds)
-
-    def get_next(self) -> dict[str, np.ndarray] | None:
-        return next(self._it, None)
-
-
-def quantise_head(src: Path, feeds: list[dict[str, np.ndarray]], out: Path) -> None:
-    """The int8 QDQ model of head `src` (module docstring, step 3) written to `out`."""
-    from onnxruntime.quantization import CalibrationMethod, QuantFormat, QuantType, quantize_static
-    from onnxruntime.quantization.calibrate import (
-        TensorData,
-        TensorsData,
-        load_tensors_data,
-        save_tensors_data,
-    )
-    from onnxruntime.quantization.shape_inference import quant_pre_process
-
-    opts = dict(quant_format=QuantFormat.QDQ, per_channel=True, activation_type=QuantType.QUInt8,
-                weight_type=QuantType.QInt8, calibrate_method=CalibrationMethod.MinMax)
-    with tempfile.TemporaryDirectory(prefix="swir-int8-") as tmp:
-        pre, cache = Path(tmp, "pre.onnx"), Path(tmp, "ranges.json")
-        quant_pre_process(str(src), str(pre), skip_symbolic_shape=True)
-        quantize_static(str(pre), str(Path(tmp, "first.onnx")), _Feeds(feeds), calibration_cache_path=cache,
-                        **opts)
-        ranges = load_tensors_data(cache)
-        rounded = {}
-        for name, td in ranges.data.items():
-            lo, hi = rounded_range(np.asarray(td.lowest).item(), np.asarray(td.highest).item())
-            rounded[name] = TensorData(lowest=np.float32(lo), highest=np.float32(hi))
-        cache.unlink()
-        save_tensors_data(TensorsData(CalibrationMethod.MinMax, rounded), cache)
-        quantize_static(str(pre), str(out), None, calibration_cache_path=cache, **opts)
-
-
 def made_for(version: str) -> list[PinnedFile]:
     """The made (int8) files of a version."""
-    from swir_tracker_ros.core.siamese.params import VERSIONS
 
     c = VERSIONS[version]
     return [f for f in MADE_PINNED if f.path in c.files_for("int8")]
@@ -172,7 +106,6 @@ def make(dest: Path, originals: Path | None = None, sequences: Path = DEFAULT_SE
     """Every int8 head of `versions` under `dest`, made from the verified float files of `originals`
     (default `dest`) and checked against its pin unless `check` is False; {path: "present" | "made"}.
     QuantiseError (one line) when a file cannot be made or is not the pinned one."""
-    from swir_tracker_ros.errors import ModelError
 
     originals = Path(originals or dest)
     done: dict[str, str] = {}
@@ -194,7 +127,7 @@ def make(dest: Path, originals: Path | None = None, sequences: Path = DEFAULT_SE
             os.close(fd)
             tmp = Path(tmp_name)
             try:
-                quantise_head(originals / head, feeds[head], tmp)
+                quantise_model(originals / head, feeds[head], tmp)
                 got = sha256_of(tmp)
                 if check and got != f.sha256:
                     raise QuantiseError(f"{f.path} made from {head} has sha256 {got}, pinned {f.sha256} "
