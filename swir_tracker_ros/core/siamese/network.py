@@ -18,12 +18,12 @@ wrong result for LightTrack-M's backbone. No PyTorch at run time.
   for the 256 px crop, 18 for 288) giving `cls` (S x S, sigmoid applied) and `reg` (4 x S x S side
   distances). Those five input nodes are cut when the session is built (`_numpy_input`) and done here in
   numpy with the same float32 operations (`lighttrack_input`): the features are bit for bit the file's, the
-  backbone about 2 ms (15 %) faster at 256 px (benchmarks/network_speed.py; onnxruntime runs them on the
+  search about 2.5 ms (14 %) faster at 256 px (benchmarks/network_speed.py; onnxruntime runs them on the
   plain NHWC layout, outside its fused blocked-layout graph).
 
-Graph optimisation: onnxruntime's default level (all) is used; it measured fastest for every model (about
-3x the disabled/basic/extended levels, docs/siamese.md "Faster networks"). Precision: the heads in float32 or
-int8 (`SiameseParams.precision`; the int8 heads made from the float ones, core/siamese/int8.py).
+Graph optimisation: onnxruntime's default level (all) is used; it measured fastest for every model (2-3x
+faster than the disabled/basic/extended levels, docs/siamese.md "Faster networks"). Precision: the heads in
+float32 or int8 (`SiameseParams.precision`; the int8 heads made from the float ones, core/siamese/int8.py).
 
 The exemplar features are computed once per template (`set_exemplar`), the search features on every search.
 """
