@@ -7,7 +7,7 @@ Only the heads are quantised: measured (benchmarks/network_speed.py, docs/siames
 int8 backbone is not faster than the float one on this CPU for any of the three networks (onnxruntime's float
 kernels fuse Conv + activation in the blocked NCHWc layout; the int8 graph keeps the swish / SE blocks as
 separate QLinear ops) and its maps are far from float's, where the int8 heads shorten the search (LightTrack-M
-by 1.6 ms of 15.7, v3 0.7 of 4.2, v2 0.3 of 3.0) with their maps close to float's.
+by 1.5 ms of 16.4, v3 0.7 of 4.2, v2 0.2 of 3.0) with their maps close to float's.
 
 Recipe: static QDQ, per-channel int8 weights, uint8 activations, MinMax ranges. `quant_pre_process` (onnx
 shape inference, onnxruntime's basic graph optimisation: LightTrack-M's fp16 weights folded to float32),

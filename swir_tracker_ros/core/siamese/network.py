@@ -18,7 +18,7 @@ wrong result for LightTrack-M's backbone. No PyTorch at run time.
   for the 256 px crop, 18 for 288) giving `cls` (S x S, sigmoid applied) and `reg` (4 x S x S side
   distances). Those five input nodes are cut when the session is built (`_numpy_input`) and done here in
   numpy with the same float32 operations (`lighttrack_input`): the features are bit for bit the file's, the
-  search about 2.5 ms (14 %) faster at 256 px (benchmarks/network_speed.py; onnxruntime runs them on the
+  search about 2 ms (11-14 %) faster at 256 px (benchmarks/network_speed.py; onnxruntime runs them on the
   plain NHWC layout, outside its fused blocked-layout graph).
 
 Graph optimisation: onnxruntime's default level (all) is used; it measured fastest for every model (2-3x

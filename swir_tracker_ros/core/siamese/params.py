@@ -94,7 +94,7 @@ class SiameseParams(FilterParams):
                             "loaded 2-core machine, docs/siamese.md)", 1, 64)
     precision: str = param("float32", "the head's arithmetic: float32 (the published heads) or int8 (heads "
                                       "quantised by `make models` from them, static QDQ calibrated on named "
-                                      "development frames; the search 9-16 % shorter, maps within int8 "
+                                      "development frames; the search 6-16 % shorter, maps within int8 "
                                       "rounding; docs/siamese.md \"Faster networks\"); int8 is refused while "
                                       "its files are missing", choices=PRECISIONS)
     exemplar_size: int | None = param(None, "exemplar crop side (px), SiamFC; None: the version's", 31, 511)
