@@ -171,7 +171,7 @@ def variants(version: str, z_crop: np.ndarray, tmp: Path) -> list[Variant]:
     name = "input" if nano else "image"
     prep = blob if nano else bgr_batch
     bb_src = _free_spatial(bb_path) if nano else bb_path
-    exemplars, searches = calibration_crops(version, SEQUENCES)
+    exemplars, searches, _ = calibration_crops(version, SEQUENCES)
     bb_feeds = [{name: prep(x)} for x in exemplars + searches[0]]
     hfeeds = head_feeds(version, bb_path.parent.parent, SEQUENCES)[c.head]
     for label, kw in (("int8 dynamic (backbone + head)", dict(dynamic=True)),

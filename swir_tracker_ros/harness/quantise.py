@@ -45,9 +45,10 @@ class QuantiseError(Exception):
     """An int8 head cannot be made (no calibration frames, no original) or is not the pinned one."""
 
 
-def calibration_crops(version: str, sequences: Path) -> tuple[list[np.ndarray], list[list[np.ndarray]]]:
-    """(exemplar crops, search crops per instance size) of the calibration sequences (module docstring)."""
-
+def calibration_crops(version: str, sequences: Path
+                      ) -> tuple[list[np.ndarray], list[list[np.ndarray]], list[int]]:
+    """(exemplar crops, search crops per instance size, the exemplar index of each search) of the calibration
+    sequences (module docstring)."""
     c = VERSIONS[version]
     sizes = [s for s in (c.instance_size, c.big_instance_size) if s]
     missing = [s for s in CALIBRATION if not (sequences / s).is_dir()]
@@ -57,6 +58,7 @@ def calibration_crops(version: str, sequences: Path) -> tuple[list[np.ndarray], 
                             f"../shared/data/sequences; pass --sequences)")
     exemplars: list[np.ndarray] = []
     searches: list[list[np.ndarray]] = [[] for _ in sizes]
+    owner: list[int] = []
     for name in CALIBRATION:
         files, gt = frame_files(sequences / name), read_gt(sequences / name)
         first = read_frame(files[0])
@@ -68,35 +70,30 @@ def calibration_crops(version: str, sequences: Path) -> tuple[list[np.ndarray], 
                 continue
             prev = gt[k - 1]
             img, s_z = read_frame(files[k]), context_side(prev.w, prev.h, 0.5)
+            owner.append(len(exemplars) - 1)
             for j, inst in enumerate(sizes):
                 searches[j].append(cut_subpixel(img, prev.cx, prev.cy, s_z * inst / c.exemplar_size, inst,
                                                 fill))
-    return exemplars, searches
+    return exemplars, searches, owner
 
 
 def head_feeds(version: str, originals: Path, sequences: Path) -> dict[str, list[dict[str, np.ndarray]]]:
     """{float head path under the model directory: calibration feeds} of a version: the float backbone's
     features of the calibration crops, each search paired with its sequence's exemplar."""
-
     c = VERSIONS[version]
     net = network(c, originals)
-    exemplars, searches = calibration_crops(version, sequences)
+    exemplars, searches, owner = calibration_crops(version, sequences)
     zs = [net.features(z) for z in exemplars]
-    per_seq = len(searches[0]) // max(1, len(exemplars))
     heads = [h for h in (c.head, c.big_head) if h]
     names = ("input1", "input2") if c.family == "nanotrack" else ("zf", "xf")
     out = {}
     for head, crops in zip(heads, searches):
-        feeds = []
-        for i, x in enumerate(crops):
-            feeds.append({names[0]: zs[min(i // max(1, per_seq), len(zs) - 1)], names[1]: net.features(x)})
-        out[head] = feeds
+        out[head] = [{names[0]: zs[owner[i]], names[1]: net.features(x)} for i, x in enumerate(crops)]
     return out
 
 
 def made_for(version: str) -> list[PinnedFile]:
     """The made (int8) files of a version."""
-
     c = VERSIONS[version]
     return [f for f in MADE_PINNED if f.path in c.files_for("int8")]
 
@@ -106,7 +103,6 @@ def make(dest: Path, originals: Path | None = None, sequences: Path = DEFAULT_SE
     """Every int8 head of `versions` under `dest`, made from the verified float files of `originals`
     (default `dest`) and checked against its pin unless `check` is False; {path: "present" | "made"}.
     QuantiseError (one line) when a file cannot be made or is not the pinned one."""
-
     originals = Path(originals or dest)
     done: dict[str, str] = {}
     for version in versions:
