@@ -17,6 +17,9 @@ TSTAMP  := $(TRAIN)/.installed
 MODELS  := $(VENV)/share/swir_tracker_ros/models
 SHARED_MODELS ?= ../shared/models
 WEIGHTS := $(PY) swir_tracker_ros/core/siamese/weights.py --dest $(MODELS) --mirror $(SHARED_MODELS) --python $(VPY)
+# the int8 heads, made from the float ones (swir_tracker_ros/harness/quantise.py); without the float files or
+# the calibration frames (../shared/data/sequences) one line says so and precision int8 refuses to start
+INT8    := $(VPY) -m swir_tracker_ros.harness.quantise --dest $(MODELS) --optional
 PIP_FLAGS ?= --disable-pip-version-check -q
 
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
@@ -28,12 +31,15 @@ export PYTHONDONTWRITEBYTECODE = 1
 # network configurations refuse to start (docs/siamese.md); `make models` (and `make test`) require them.
 venv: $(STAMP) $(ISTAMP)
 	$(WEIGHTS) --optional
+	$(INT8)
 
 # The networks' pinned weights (swir_tracker_ros/core/siamese/weights.py: upstream commits, sha256), copied
 # from $(SHARED_MODELS) when present, else fetched at the pinned commits (LightTrack-M: its upstream OpenVINO
-# IR converted by the shared converter with the venv's onnx); verified either way.
+# IR converted by the shared converter with the venv's onnx); verified either way. Then the int8 heads made from
+# them and checked against their pins (precision int8, docs/siamese.md "Faster networks").
 models: $(STAMP)
 	$(WEIGHTS)
+	$(INT8)
 
 $(STAMP): requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
 	test -x $(VPY) || $(PY) -m venv $(VENV)

@@ -43,10 +43,12 @@ class Entry:
     kind: str  # "network" (Player.siamese), "opencv" (Player.opencv) or "ours" (Player.ours)
     name: str
     optional: bool = False  # skipped, with a note, when it cannot be built (a version not there yet)
+    precision: str = "float32"  # a network's heads (SiameseParams.precision)
+    requested: bool = False  # played only when `--only` names it
 
     def player(self) -> Player:
         if self.kind == "network":
-            return Player.siamese(self.name)
+            return Player.siamese(self.name, precision=self.precision)
         if self.kind == "opencv":
             return Player.opencv(self.name)
         return Player.ours(self.name)
@@ -63,6 +65,9 @@ ENTRIES = (
     Entry("eco", "ours", "eco"),
     Entry("fused", "ours", "fused"),
     Entry("siamese", "ours", "siamese"),
+    # the int8 heads (issue 53 item 1, docs/siamese.md "Faster networks"): `--only` them
+    Entry("siamese_lighttrack_int8", "network", "lighttrack", precision="int8", requested=True),
+    Entry("siamese_v3_int8", "network", "v3", precision="int8", requested=True),
 )
 
 
@@ -74,7 +79,7 @@ def players(only: list[str] | None, say) -> list[Player]:
         raise HarnessError(f"unknown label {bad[0]!r}; the stored set is {', '.join(known)}")
     out = []
     for e in ENTRIES:
-        if only and e.label not in only:
+        if (only and e.label not in only) or (e.requested and not only):
             continue
         try:
             out.append(e.player())
@@ -101,7 +106,8 @@ def main(argv: list[str] | None = None) -> int:
         print(line, file=sys.stderr, flush=True)
 
     if a.list:
-        print("\n".join(e.label + (" (when available)" if e.optional else "") for e in ENTRIES))
+        print("\n".join(e.label + (" (when available)" if e.optional else "")
+                         + (" (with --only)" if e.requested else "") for e in ENTRIES))
         return 0
     try:
         dirs = data_dirs(a.data or [DEV])

@@ -24,7 +24,7 @@ from swir_tracker_ros.core.siamese.locator import locate
 from swir_tracker_ros.core.siamese.params import VERSIONS as SIAMESE_VERSIONS
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
-from swir_tracker_ros.errors import HarnessError, ModelError
+from swir_tracker_ros.errors import HarnessError, ModelError, ParameterError
 from swir_tracker_ros.harness.compare import (
     NANO_VERSION,
     bench_python,
@@ -55,6 +55,7 @@ from swir_tracker_ros.harness.store import (
 
 PROTOCOLS = ("ope", "sre")
 WHOLE_PIXEL = "-wholepixel"  # Siamese configuration suffix: the authors' whole-pixel crops
+INT8 = "-int8"  # Siamese configuration suffix: the int8 heads (SiameseParams.precision)
 _COST = {"CSRT": 0, "swir": 1, "Nano": 2, "KCF": 3, "MOSSE": 4}  # slowest first (better packing on --jobs)
 
 
@@ -98,19 +99,19 @@ class Player:
         return cls(opencv_label(tracker), "opencv", tracker)
 
     @classmethod
-    def siamese(cls, version: str, whole_pixel: bool = False) -> Player:
+    def siamese(cls, version: str, whole_pixel: bool = False, precision: str = "float32") -> Player:
         """The Siamese tracker (core/siamese) with NanoTrack weights `version`, label `siamese_<version>`;
         `whole_pixel`: with the authors' whole-pixel crops (SiameseParams.subpixel_crops False), label
-        `siamese_<version>_wholepixel`."""
+        `siamese_<version>_wholepixel`; `precision` "int8": the int8 heads, label `..._int8`."""
         if version not in SIAMESE_VERSIONS:
             raise HarnessError(f"unknown Siamese model version {version!r}; known: "
                                f"{', '.join(SIAMESE_VERSIONS)}")
         try:  # fail now on missing weights, not in a pool worker
-            for rel in (SIAMESE_VERSIONS[version].backbone, SIAMESE_VERSIONS[version].head):
+            for rel in SIAMESE_VERSIONS[version].files_for(precision):
                 locate(rel)
-        except ModelError as exc:
+        except (ModelError, ParameterError) as exc:
             raise HarnessError(str(exc)) from None
-        conf = version + (WHOLE_PIXEL if whole_pixel else "")
+        conf = version + (WHOLE_PIXEL if whole_pixel else "") + (INT8 if precision == "int8" else "")
         return cls(f"siamese_{conf.replace('-', '_')}", "network", conf)
 
     def code(self) -> str:
@@ -130,9 +131,11 @@ class Player:
 
 
 def siamese_params(configuration: str) -> SiameseParams:
-    """The Siamese tracker's parameters of a network player's configuration (`v2`, `v2-wholepixel`)."""
-    version, _, mode = configuration.partition("-")
-    return SiameseParams(version=version, subpixel_crops=mode != WHOLE_PIXEL[1:])
+    """The Siamese tracker's parameters of a network player's configuration (`v2`, `v2-wholepixel`,
+    `lighttrack-int8`, `v3-wholepixel-int8`)."""
+    version, *modes = configuration.split("-")
+    return SiameseParams(version=version, subpixel_crops=WHOLE_PIXEL[1:] not in modes,
+                         precision="int8" if INT8[1:] in modes else "float32")
 
 
 @lru_cache(maxsize=32)

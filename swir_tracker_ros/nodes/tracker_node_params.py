@@ -28,7 +28,8 @@ def missing_models(params: TrackerParams) -> str | None:
     try:
         filter_class(params.base).check_resources(params.base)
         if params.fusion is not None:
-            require(params.fusion.network.constants, params.fusion.network.model_dir or None)
+            require(params.fusion.network.constants, params.fusion.network.model_dir or None,
+                    params.fusion.network.precision)
     except ModelError as exc:
         return str(exc)
     return None

@@ -60,7 +60,7 @@ class SiameseBase(BaseFilter):
     def check_resources(cls, fp: SiameseParams) -> None:
         """The network's weights, verified now (ModelError naming the file and the fix): a configuration on
         this filter refuses to start without them instead of failing when a target is picked."""
-        require(fp.constants, fp.model_dir or None)
+        require(fp.constants, fp.model_dir or None, fp.precision)
 
     # ------------------------------------------------------------------ frames
     def _image(self, img: np.ndarray) -> np.ndarray:

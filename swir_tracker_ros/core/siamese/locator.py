@@ -14,14 +14,27 @@ import os
 import sys
 from pathlib import Path
 
-from swir_tracker_ros.core.siamese.weights import DETECTOR_PINNED, SHARE_SUBDIR, PinnedFile, pinned, sha256_of
+from swir_tracker_ros.core.siamese.int8 import MADE_PINNED, MAKER, made_pin
+from swir_tracker_ros.core.siamese.weights import DETECTOR_PINNED, SHARE_SUBDIR, PinnedFile, sha256_of
+from swir_tracker_ros.core.siamese.weights import pinned as upstream_pinned
 from swir_tracker_ros.errors import ModelError
 
 ENV_VAR = "SWIR_TRACKER_MODELS"
 
 
+def pinned(rel: str) -> PinnedFile:
+    """The pin of `rel`: an upstream file (weights.py) or a made one (int8.py); KeyError if neither."""
+    try:
+        return upstream_pinned(rel)
+    except KeyError:
+        return made_pin(rel)
+
+
 def fix(pin: PinnedFile) -> str:
     """The one fix sentence of a missing or corrupt file: `make models`, the variable, the upstream URL."""
+    if pin in MADE_PINNED:
+        return (f"run `make models` (makes it from the float head and ../shared/data/sequences: {MAKER}), or "
+                f"set {ENV_VAR} to a directory holding it, or use precision float32 (docs/siamese.md)")
     holding, doc = (("detector/", "docs/acquisition.md") if pin in DETECTOR_PINNED
                     else ("v2/, v3/ and lighttrack/", "docs/siamese.md"))
     return (f"run `make models` (copies ../shared/models or fetches the pinned upstream {pin.source.page}), "

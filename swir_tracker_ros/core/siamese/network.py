@@ -12,9 +12,18 @@ wrong result for LightTrack-M's backbone. No PyTorch at run time.
   distances).
   Input: float32 1x3xSxS, BGR 0-255. The published backbone declares a fixed 255 px input; its spatial size is
   made free when the session is built (the file on disk stays the verified one).
-- LightTrack-Mobile (Yan et al., CVPR 2021): a NAS-found backbone (96 x H/16 x W/16 features) that takes the
-  uint8 1xHxWx3 BGR crop and normalises it itself, a pixel-wise correlation head per search-map size (16 for
-  the 256 px crop, 18 for 288) giving `cls` (S x S, sigmoid applied) and `reg` (4 x S x S side distances).
+- LightTrack-Mobile (Yan et al., CVPR 2021): a NAS-found backbone (96 x H/16 x W/16 features) whose
+  published file takes the uint8 1xHxWx3 BGR crop and normalises it itself (Cast, Gather BGR -> RGB, Sub the
+  ImageNet mean, Div its deviation, Transpose to NCHW), a pixel-wise correlation head per search-map size (16
+  for the 256 px crop, 18 for 288) giving `cls` (S x S, sigmoid applied) and `reg` (4 x S x S side
+  distances). Those five input nodes are cut when the session is built (`_numpy_input`) and done here in
+  numpy with the same float32 operations (`lighttrack_input`): the features are bit for bit the file's, the
+  search about 2 ms (11-14 %) faster at 256 px (benchmarks/network_speed.py; onnxruntime runs them on the
+  plain NHWC layout, outside its fused blocked-layout graph).
+
+Graph optimisation: onnxruntime's default level (all) is used; it measured fastest for every model (2-3x
+faster than the disabled/basic/extended levels, docs/siamese.md "Faster networks"). Precision: the heads in
+float32 or int8 (`SiameseParams.precision`; the int8 heads made from the float ones, core/siamese/int8.py).
 
 The exemplar features are computed once per template (`set_exemplar`), the search features on every search.
 """
@@ -49,16 +58,75 @@ def _free_spatial(path: Path) -> bytes:
     return model.SerializeToString()
 
 
-def session(path: Path, threads: int = 1, free_spatial: bool = False) -> ort.InferenceSession:
+LIGHTTRACK_MEAN = np.array([123.675, 116.28, 103.53], np.float32)  # RGB, the published backbone's constants
+LIGHTTRACK_STD = np.array([58.395, 57.12, 57.375], np.float32)
+_LIGHTTRACK_INPUT_OPS = ("Cast", "Gather", "Sub", "Div", "Transpose")
+
+
+def _numpy_input(path: Path) -> bytes:
+    """LightTrack-M's backbone of `path` without its five input nodes (Cast, Gather, Sub, Div, Transpose):
+    its input becomes the normalised float32 1x3xHxW crop (`lighttrack_input`). ModelError when the file's
+    first nodes are not those (another file than the pinned one)."""
+    import onnx
+    from onnx import TensorProto, helper, numpy_helper
+
+    model = onnx.load(str(path))
+    g = model.graph
+    first = g.node[:len(_LIGHTTRACK_INPUT_OPS)]
+    consts = {i.name: numpy_helper.to_array(i) for i in g.initializer}
+    ok = (tuple(n.op_type for n in first) == _LIGHTTRACK_INPUT_OPS
+          and np.array_equal(consts.get(first[1].input[1]), [2, 1, 0])
+          and np.array_equal(consts.get(first[2].input[1], np.zeros(0)).ravel(), LIGHTTRACK_MEAN)
+          and np.array_equal(consts.get(first[3].input[1], np.zeros(0)).ravel(), LIGHTTRACK_STD))
+    if not ok:
+        raise ModelError(f"model file {path} does not start with LightTrack-M's input normalisation "
+                         f"({', '.join(_LIGHTTRACK_INPUT_OPS)}); not the pinned backbone")
+    used = {n.input[1] for n in first[1:4]}
+    rest = list(g.node[len(_LIGHTTRACK_INPUT_OPS):])
+    del g.node[:]
+    g.node.extend(rest)
+    keep = [i for i in g.initializer if i.name not in used]
+    del g.initializer[:]
+    g.initializer.extend(keep)
+    del g.input[:]
+    g.input.extend([helper.make_tensor_value_info(first[4].output[0], TensorProto.FLOAT, [1, 3, "H", "W"])])
+    return model.SerializeToString()
+
+
+def lighttrack_input(patch: np.ndarray) -> np.ndarray:
+    """The normalised float32 1x3xSxS input of LightTrack-M's backbone (`_numpy_input`) of an SxS gray or
+    BGR uint8 crop: channels in RGB order, (x - mean) / std in float32, as the published file's nodes."""
+    x = patch.astype(np.float32)
+    if x.ndim == 2:
+        chans = [(x - m) / s for m, s in zip(LIGHTTRACK_MEAN, LIGHTTRACK_STD)]
+    else:
+        chans = [(x[:, :, 2 - c] - LIGHTTRACK_MEAN[c]) / LIGHTTRACK_STD[c] for c in range(3)]
+    return np.stack(chans)[None]
+
+
+LEVELS = {"disabled": ort.GraphOptimizationLevel.ORT_DISABLE_ALL,
+          "basic": ort.GraphOptimizationLevel.ORT_ENABLE_BASIC,
+          "extended": ort.GraphOptimizationLevel.ORT_ENABLE_EXTENDED,
+          "all": ort.GraphOptimizationLevel.ORT_ENABLE_ALL}
+"""onnxruntime's graph optimisation levels (benchmarks/network_speed.py measures them; "all" is used)."""
+
+
+def session(path: Path, threads: int = 1, free_spatial: bool = False, level: str = "all",
+            numpy_input: bool = False, spinning: bool = True) -> ort.InferenceSession:
     """An onnxruntime CPU session of the model at `path` with `threads` intra-op threads (one inter-op,
-    sequential); ModelError if onnxruntime cannot load it."""
+    sequential), graph optimisation `level` (LEVELS) and the intra-op threads' spin-waiting on or off;
+    `free_spatial`: NanoTrack's backbone with free input sizes, `numpy_input`: LightTrack-M's backbone without
+    its input nodes. ModelError if onnxruntime cannot load it."""
     opts = ort.SessionOptions()
     opts.intra_op_num_threads = threads
     opts.inter_op_num_threads = 1
     opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+    opts.graph_optimization_level = LEVELS[level]
     opts.log_severity_level = 3  # errors only: no per-run shape warnings on stderr
+    if not spinning:
+        opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
     try:
-        model = _free_spatial(path) if free_spatial else str(path)
+        model = (_free_spatial(path) if free_spatial else _numpy_input(path) if numpy_input else str(path))
         return ort.InferenceSession(model, sess_options=opts, providers=["CPUExecutionProvider"])
     except Exception as exc:  # onnxruntime's and onnx's own error types: the file is not a usable model
         raise ModelError(f"model file {path} cannot be loaded by onnxruntime "
@@ -66,10 +134,11 @@ def session(path: Path, threads: int = 1, free_spatial: bool = False) -> ort.Inf
                          ) from None
 
 
-def require(constants: VersionConstants, model_dir: str | Path | None = None) -> list[Path]:
-    """The verified paths of every file the version needs; ModelError naming the first missing one and the
-    fix (for a configuration to check at start-up, before any target)."""
-    return [locate(rel, model_dir) for rel in constants.files]
+def require(constants: VersionConstants, model_dir: str | Path | None = None,
+            precision: str = "float32") -> list[Path]:
+    """The verified paths of every file the version needs at `precision`; ModelError naming the first
+    missing one and the fix (for a configuration to check at start-up, before any target)."""
+    return [locate(rel, model_dir) for rel in constants.files_for(precision)]
 
 
 class SiameseNet(ABC):
@@ -106,9 +175,9 @@ class NanoNet(SiameseNet):
     """The backbone and head of one NanoTrack version, loaded from their verified ONNX files."""
 
     def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
-                 threads: int = 1) -> None:
+                 threads: int = 1, precision: str = "float32") -> None:
         super().__init__()
-        self.backbone_path, self.head_path = require(constants, model_dir)
+        self.backbone_path, self.head_path = require(constants, model_dir, precision)
         self._backbone = session(self.backbone_path, threads, free_spatial=True)
         self._head = session(self.head_path, threads)
         self._input = self._backbone.get_inputs()[0].name
@@ -131,14 +200,16 @@ def bgr_batch(patch: np.ndarray) -> np.ndarray:
 
 
 class LightNet(SiameseNet):
-    """LightTrack-M's backbone and its two heads (16 x 16 and 18 x 18 search maps), from verified files."""
+    """LightTrack-M's backbone (its input normalisation done in numpy, module docstring) and its two heads
+    (16 x 16 and 18 x 18 search maps), from verified files."""
 
     def __init__(self, constants: VersionConstants, model_dir: str | Path | None = None,
-                 threads: int = 1) -> None:
+                 threads: int = 1, precision: str = "float32") -> None:
         super().__init__()
-        paths = require(constants, model_dir)
+        paths = require(constants, model_dir, precision)
         self.backbone_path, self.head_path = paths[0], paths[1]
-        self._backbone = session(paths[0], threads)
+        self._backbone = session(paths[0], threads, numpy_input=True)
+        self._input = self._backbone.get_inputs()[0].name
         self._heads = {}
         for path in paths[1:]:
             head = session(path, threads)
@@ -146,7 +217,7 @@ class LightNet(SiameseNet):
 
     def features(self, patch: np.ndarray) -> np.ndarray:
         """Backbone features (1 x 96 x S/16 x S/16) of an SxS (x3) uint8 crop."""
-        return self._backbone.run(None, {"image": bgr_batch(patch)})[0]
+        return self._backbone.run(None, {self._input: lighttrack_input(patch)})[0]
 
     def _head_maps(self, x: np.ndarray, patch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sigmoid score and side distances of the head for this crop's map size."""
@@ -163,6 +234,6 @@ NETWORKS = {"nanotrack": NanoNet, "lighttrack": LightNet}
 
 
 def network(constants: VersionConstants, model_dir: str | Path | None = None,
-            threads: int = 1) -> SiameseNet:
-    """The verified, loaded network of a version (ModelError without its files)."""
-    return NETWORKS[constants.family](constants, model_dir, threads)
+            threads: int = 1, precision: str = "float32") -> SiameseNet:
+    """The verified, loaded network of a version at `precision` (ModelError without its files)."""
+    return NETWORKS[constants.family](constants, model_dir, threads, precision)

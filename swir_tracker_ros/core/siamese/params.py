@@ -22,6 +22,11 @@ from swir_tracker_ros.core.conditioning import ConditioningConfig
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import nested, param
 
+PRECISIONS = ("float32", "int8")
+"""The heads' arithmetic: the published float32 files, or int8 heads made from them (docs/siamese.md "Faster
+networks"; the backbone stays float32: its int8 form measured slower and far from float's)."""
+INT8_SUFFIX = "_int8.onnx"  # a made int8 head: the float head's name with this ending
+
 
 @dataclass(frozen=True)
 class VersionConstants:
@@ -50,8 +55,17 @@ class VersionConstants:
 
     @property
     def files(self) -> tuple[str, ...]:
-        """Every pinned file the version needs."""
+        """Every pinned file the version needs (float32)."""
         return tuple(f for f in (self.backbone, self.head, self.big_head) if f)
+
+    def files_for(self, precision: str) -> tuple[str, ...]:
+        """The pinned files of `precision` (PRECISIONS): the float backbone always; "int8": the int8 heads
+        made from the float ones (core/siamese/int8.py, harness/quantise.py)."""
+        if precision not in PRECISIONS:
+            raise ParameterError(f"precision {precision!r}; choose from {', '.join(PRECISIONS)}")
+        if precision == "float32":
+            return self.files
+        return (self.backbone, *(h.replace(".onnx", INT8_SUFFIX) for h in (self.head, self.big_head) if h))
 
 
 VERSIONS: dict[str, VersionConstants] = {
@@ -78,6 +92,11 @@ class SiameseParams(FilterParams):
                                "then the installed share directory (core/siamese/locator.py)")
     threads: int = param(1, "onnxruntime intra-op threads per network (1: measured fastest per core on a "
                             "loaded 2-core machine, docs/siamese.md)", 1, 64)
+    precision: str = param("float32", "the head's arithmetic: float32 (the published heads) or int8 (heads "
+                                      "quantised by `make models` from them, static QDQ calibrated on named "
+                                      "development frames; the search 6-16 % shorter, maps within int8 "
+                                      "rounding; docs/siamese.md \"Faster networks\"); int8 is refused while "
+                                      "its files are missing", choices=PRECISIONS)
     exemplar_size: int | None = param(None, "exemplar crop side (px), SiamFC; None: the version's", 31, 511)
     instance_size: int | None = param(None, "search crop side (px), SiamFC; None: the version's (LightTrack: "
                                             "its small_sz, big_sz for a small target)", 63, 1023)

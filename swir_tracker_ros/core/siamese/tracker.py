@@ -115,7 +115,7 @@ class SiameseTracker:
         validate_params(params)  # ParameterError naming the parameter
         self.params = params
         self.constants = params.constants
-        self.net = network(self.constants, params.model_dir or None, params.threads)
+        self.net = network(self.constants, params.model_dir or None, params.threads, params.precision)
         self.lighttrack = self.constants.family == "lighttrack"
         self.exemplar_size = self.constants.exemplar_size
         self.instance_size = self.constants.instance_size  # LightTrack: chosen with each template
