@@ -396,3 +396,18 @@ def test_the_error_aims_at_the_last_accepted_box_while_the_verdict_rejects_the_b
         assert cap.error[0] != cap.error[1]
     finally:
         node.destroy_node()
+
+
+@pytest.mark.usefixtures("nanotrack_weights", "lighttrack_weights")
+def test_the_judged_configuration_declares_its_judge_and_refuses_bad_weights(context: Context) -> None:
+    node, cap = make(context, init_box=[88.0, 84.0, 24.0, 24.0], **{"tracker.configuration": "judged"})
+    try:
+        weights = node.get_parameter("tracker.lead.second.weights").value
+        assert list(weights) == pytest.approx(node.tracker.params.lead.second.weights)
+        res = node.set_parameters([Parameter("tracker.lead.second.weights", value=[1.0, 2.0])])[0]
+        assert not res.successful and "weights" in res.reason
+        for i in range(5):
+            feed(node, scene(100.0 + 2 * i, 96.0, seed=i), 10.0 + 0.04 * i)
+        assert cap.state and node.tracker._track.lead.second is not None
+    finally:
+        node.destroy_node()
