@@ -48,7 +48,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from swir_tracker_ros.core.siamese.crops import blob, context_side, cut_subpixel
+from swir_tracker_ros.core.siamese.crops import blob
 from swir_tracker_ros.core.siamese.locator import locate
 from swir_tracker_ros.core.siamese.maps import softmax_score
 from swir_tracker_ros.core.siamese.network import (
@@ -59,6 +59,7 @@ from swir_tracker_ros.core.siamese.network import (
 )
 from swir_tracker_ros.core.siamese.params import VERSIONS, SiameseParams
 from swir_tracker_ros.errors import ModelError
+from swir_tracker_ros.harness.quantise import tracker_crops
 from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
 
 SEQUENCES = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "sequences"
@@ -71,23 +72,7 @@ def real_crops(version: str, sequence: Path, n: int,
                instance: int = 0) -> tuple[np.ndarray, list[np.ndarray]]:
     """(exemplar crop of frame 1's box, `n` search crops (side `instance`, 0: the version's) of frames 2..
     around the previous frame's box)."""
-    c = VERSIONS[version]
-    inst = instance or c.instance_size
-    files, gt = frame_files(sequence), read_gt(sequence)
-    first = read_frame(files[0])
-    fill = np.mean(first, axis=(0, 1))
-    b = gt[0]
-    z = cut_subpixel(first, b.cx, b.cy, context_side(b.w, b.h, 0.5), c.exemplar_size, fill)
-    xs = []
-    for k in range(1, len(files)):
-        p = gt[k - 1]
-        if p.is_valid():
-            s_z = context_side(p.w, p.h, 0.5)
-            img = read_frame(files[k])
-            xs.append(cut_subpixel(img, p.cx, p.cy, s_z * inst / c.exemplar_size, inst, fill))
-        if len(xs) == n:
-            break
-    return z, xs
+    return tracker_crops(version, sequence, range(1, len(frame_files(sequence))), instance, limit=n)
 
 
 @dataclass

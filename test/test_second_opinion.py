@@ -86,22 +86,25 @@ def test_the_second_looks_on_its_schedule(crossing_frames) -> None:
 
 
 @pytest.mark.usefixtures("nanotrack_weights", "lighttrack_weights")
-def test_a_standing_second_box_moves_the_leader_there(crossing_frames) -> None:
-    """With a judge that always trusts the second, the leader searches again where the second answered:
-    the track's box is the leader's answer around the second's box."""
+@pytest.mark.parametrize("follows", [False, True])
+def test_a_standing_second_box_is_the_frames_box(crossing_frames, follows: bool) -> None:
+    """With a judge that always trusts the second, the frame's box is the second's and the leader keeps its
+    own state; with `lead_follows` the leader searches again where the second answered and the frame's box is
+    that answer (near the second's), its state too."""
     frames, gts = crossing_frames
-    trk = Tracker(_judged([*BIAS_ONLY, 50.0], lead_follows=True, blend=0.0))
+    trk = Tracker(_judged([*BIAS_ONLY, 50.0], lead_follows=follows, blend=0.0))
     trk.init(frames[0], gts[0])
     for frame in frames[1:6]:
         res = trk.update(frame)
         lead = trk._track.lead
-        assert lead.opinion is not None and lead.opinion.stands
+        assert lead.opinion is not None and lead.opinion.stands and res.state is TrackState.TRACKING
         second = lead.opinion.det.smoothed
-        assert res.state is TrackState.TRACKING
-        # the leader searched around the second's box (its crop is centred there) and its box is that answer
-        assert lead.net.center == pytest.approx(res.box.center)
-        assert math.hypot(res.box.cx - second.cx, res.box.cy - second.cy) < max(second.w, second.h)
-
+        if follows:
+            assert lead.net.center == pytest.approx(res.box.center)
+            assert math.hypot(res.box.cx - second.cx, res.box.cy - second.cy) < max(second.w, second.h)
+        else:
+            assert res.box.as_tuple() == second.as_tuple()
+            assert lead.net.center != pytest.approx(res.box.center)  # the leader follows its own answer
 
 @pytest.mark.usefixtures("nanotrack_weights", "lighttrack_weights")
 def test_a_disagreeing_second_is_moved_onto_the_standing_leader(crossing_frames) -> None:
@@ -129,18 +132,6 @@ def test_between_its_looks_the_second_moves_with_the_track(crossing_frames) -> N
     assert second.net.center == pytest.approx(res.box.center)  # shifted by every accepted displacement
     assert second.net.size == (gts[0].w, gts[0].h)  # its own size, untouched
 
-
-@pytest.mark.usefixtures("nanotrack_weights", "lighttrack_weights")
-def test_a_standing_second_box_is_the_frames_box_and_the_leader_keeps_its_state(crossing_frames) -> None:
-    frames, gts = crossing_frames
-    trk = Tracker(_judged([*BIAS_ONLY, 50.0], lead_follows=False, blend=0.0))
-    trk.init(frames[0], gts[0])
-    for frame in frames[1:6]:
-        res = trk.update(frame)
-        lead = trk._track.lead
-        assert lead.opinion.stands
-        assert res.box.as_tuple() == lead.opinion.det.smoothed.as_tuple()
-        assert lead.net.center != pytest.approx(res.box.center)  # the leader follows its own answer
 
 
 def test_two_agreeing_boxes_blend_and_disagreeing_ones_do_not() -> None:

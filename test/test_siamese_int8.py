@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swir_tracker_ros.core.siamese.crops import context_side, cut_subpixel
 from swir_tracker_ros.core.siamese.int8 import rounded_range
 from swir_tracker_ros.core.siamese.locator import locate, pinned
 from swir_tracker_ros.core.siamese.network import bgr_batch, network, session
@@ -20,8 +19,7 @@ from swir_tracker_ros.core.siamese.params import VERSIONS, SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
 from swir_tracker_ros.core.siamese.weights import sha256_of
 from swir_tracker_ros.errors import ModelError, ParameterError
-from swir_tracker_ros.harness.quantise import make
-from swir_tracker_ros.harness.sources import frame_files, read_frame, read_gt
+from swir_tracker_ros.harness.quantise import make, tracker_crops
 
 # Measured on these crops (otb_walking2 frames 10 and 30, not a calibration sequence; antiuav_irclip04 frame
 # 60): largest score difference 0.058 (LightTrack-M), 0.077 (v3), 0.047 (v2), smallest per crop 0.008;
@@ -48,20 +46,7 @@ def int8_dir(tmp_path_factory: pytest.TempPathFactory, sequences_dir: Path) -> P
 
 def crops(sequences_dir: Path, version: str, name: str, frames: tuple[int, ...]):
     """(exemplar crop of frame 1's box, search crops of `frames` around the previous frame's box)."""
-    c = VERSIONS[version]
-    d = sequences_dir / name
-    files, gt = frame_files(d), read_gt(d)
-    first = read_frame(files[0])
-    fill = np.mean(first, axis=(0, 1))
-    b = gt[0]
-    z = cut_subpixel(first, b.cx, b.cy, context_side(b.w, b.h, 0.5), c.exemplar_size, fill)
-    xs = []
-    for k in frames:
-        p = gt[k - 1]
-        s_z = context_side(p.w, p.h, 0.5)
-        xs.append(cut_subpixel(read_frame(files[k]), p.cx, p.cy, s_z * c.instance_size / c.exemplar_size,
-                               c.instance_size, fill))
-    return z, xs
+    return tracker_crops(version, sequences_dir / name, frames)
 
 
 @pytest.mark.parametrize("version", ["v2", "v3", "lighttrack"])

@@ -19,6 +19,7 @@ import argparse
 import os
 import sys
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +76,31 @@ def calibration_crops(version: str, sequences: Path
                 searches[j].append(cut_subpixel(img, prev.cx, prev.cy, s_z * inst / c.exemplar_size, inst,
                                                 fill))
     return exemplars, searches, owner
+
+
+def tracker_crops(version: str, folder: Path, frames: Iterable[int], instance: int = 0, limit: int = 0
+                  ) -> tuple[np.ndarray, list[np.ndarray]]:
+    """(the exemplar crop of the first frame's ground truth, the search crops (side `instance`, 0: the
+    version's) of `frames` around the previous frame's ground truth), cut as the tracker cuts them; frames
+    whose previous box is not valid are skipped, and at most `limit` crops are cut (0: all)."""
+    c = VERSIONS[version]
+    inst = instance or c.instance_size
+    files, gt = frame_files(folder), read_gt(folder)
+    first = read_frame(files[0])
+    fill = np.mean(first, axis=(0, 1))
+    b = gt[0]
+    z = cut_subpixel(first, b.cx, b.cy, context_side(b.w, b.h, 0.5), c.exemplar_size, fill)
+    xs: list[np.ndarray] = []
+    for k in frames:
+        prev = gt[k - 1]
+        if prev is None or not prev.is_valid():
+            continue
+        s_z = context_side(prev.w, prev.h, 0.5)
+        img = read_frame(files[k])
+        xs.append(cut_subpixel(img, prev.cx, prev.cy, s_z * inst / c.exemplar_size, inst, fill))
+        if limit and len(xs) == limit:
+            break
+    return z, xs
 
 
 def head_feeds(version: str, originals: Path, sequences: Path) -> dict[str, list[dict[str, np.ndarray]]]:
