@@ -3,11 +3,13 @@
 features; the second looks on its schedule and moves with the track between its looks; a standing second box
 is the frame's box (or, with `lead_follows`, the leader looks there and takes that answer); two boxes that
 agree blend; the look-alike guard vetoes a second box off the motion reference; with `recentre_iou` a second
-that disagrees with the standing leader is moved onto the leader's box."""
+that disagrees with the standing leader is moved onto the leader's box; with `agree_resumes` two agreeing
+opinions resume a lost track when the second is sure and the size is the target's."""
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import replace
 from types import SimpleNamespace
 
@@ -18,11 +20,13 @@ from swir_tracker_ros.configs import configuration
 from swir_tracker_ros.errors import ParameterError
 from swir_tracker_ros.paramfield import validate_params
 from swir_tracker_ros.policies.gone import GoneCues
-from swir_tracker_ros.policies.lead import NetworkLead
+from swir_tracker_ros.policies.lead import LeadParams, NetworkLead
 from swir_tracker_ros.policies.lookalike import LookalikeGuard, LookalikeParams
 from swir_tracker_ros.policies.second import (
     JUDGE_FEATURES,
     OFF_PATH_CAP,
+    Opinion,
+    SecondOpinion,
     SecondParams,
     blend,
     joined,
@@ -155,3 +159,31 @@ def test_the_look_alike_guard_vetoes_a_box_off_the_motion_reference() -> None:
     assert lead._departs(Box.from_center(112.0, 100.0, 20.0, 40.0), guard)  # 0.6 widths away
     assert not lead._departs(Box.from_center(108.0, 100.0, 20.0, 40.0), guard)  # 0.4 widths
     assert not lead._departs(Box.from_center(300.0, 100.0, 20.0, 40.0), None)  # no guard, no veto
+
+
+def test_the_second_is_confident_at_its_typical_psr_or_above() -> None:
+    second = SecondOpinion.__new__(SecondOpinion)  # the test reads its PSR history only
+    second.p, second._psr = SecondParams(), (deque(), deque())
+    assert not second.confident(_cues(1.0, 50.0))  # no history yet
+    second._psr[1].extend([math.log1p(10.0)] * 5)
+    assert second.confident(_cues(1.0, 10.0)) and not second.confident(_cues(1.0, 9.0))
+
+
+def test_while_gone_two_agreeing_opinions_resume_only_at_the_targets_size() -> None:
+    lead = NetworkLead.__new__(NetworkLead)  # `_agreed` reads the last box, the opinion and the second
+    lead.p, lead.box = LeadParams(), Box.from_center(100.0, 100.0, 20.0, 40.0)
+    second = SimpleNamespace(p=SecondParams(agree_resumes=True), confident=lambda c: c.psr >= 10.0)
+    lead.second = second
+
+    def agreed(own: Box, other: Box, psr: float = 20.0) -> bool:
+        lead.opinion = Opinion(SimpleNamespace(smoothed=other), _cues(1.0, psr), 0.1, False)
+        return lead._agreed(SimpleNamespace(smoothed=own))
+
+    here = Box.from_center(130.0, 100.0, 20.0, 40.0)
+    assert agreed(here, Box.from_center(131.0, 101.0, 20.0, 40.0))
+    assert not agreed(here, Box.from_center(131.0, 101.0, 20.0, 40.0), psr=5.0)  # the second is unsure
+    assert not agreed(here, Box.from_center(160.0, 100.0, 20.0, 40.0))  # they disagree
+    big = Box.from_center(130.0, 100.0, 40.0, 80.0)
+    assert not agreed(big, big)  # twice the target's side: not its size
+    second.p = SecondParams(agree_resumes=False)
+    assert not agreed(here, here)

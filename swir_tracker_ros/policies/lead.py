@@ -218,6 +218,8 @@ class NetworkLead:
                 if back is not None:
                     det, c, velocity = back
                     shown += (_crop(det),)
+        if gone and self.missed > 0 and self._agreed(det):  # two opinions agree on the target: found again
+            self.verdict.gone, resumed, gone = False, True, False
         if gone:  # 3. while gone: candidates must pass the resume bar where the motion allows
             found = [(det, c)] + [(d, cues(d)) for d in self._redetect(image, pred)]
             shown += tuple(_crop(d) for d, _ in found[1:])
@@ -281,6 +283,18 @@ class NetworkLead:
             guard.taken_back()
             return alt, k, (ref[2], ref[3])
         return None
+
+    def _agreed(self, det: SiameseDetection) -> bool:
+        """While gone, the second opinion finds the target where the leader's own answer is: the two boxes
+        agree (`agree_iou`), the second's PSR is at least its typical one, and the leader's size is the
+        target's (`resume_size`) (`SecondParams.agree_resumes`)."""
+        o, s = self.opinion, self.second
+        if o is None or s is None or not s.p.agree_resumes or not s.confident(o.cues):
+            return False
+        a = det.smoothed
+        grow = math.sqrt(a.w * a.h / max(self.box.w * self.box.h, 1e-12))
+        sized = 1.0 / self.p.resume_size <= grow <= self.p.resume_size
+        return a.iou(o.det.smoothed) >= s.p.agree_iou and sized
 
     def _departs(self, box: Box, guard: LookalikeGuard | None) -> bool:
         """A box the look-alike guard would not let the track take: its centre lies further than the guard's

@@ -104,6 +104,9 @@ class SecondParams:
     while_gone: bool = param(False, "it also looks while the leader's verdict says the target is gone; "
                                     "when its box stands then, that is the frame's box (the state stays "
                                     "the verdict's)")
+    agree_resumes: bool = param(False, "while the leader's verdict says gone (and `while_gone`), the track "
+                                       "resumes where the two boxes agree (`agree_iou`) when the second's "
+                                       "PSR is at least its typical one and the size is the target's")
     lead_follows: bool = param(False, "when the second's box stands, the leader searches again there and "
                                      "takes that answer as its state and the frame's box; False: the frame's "
                                      "box is the second's, the leader keeps its own state")
@@ -157,6 +160,11 @@ class SecondOpinion:
         """Whether it looks on this tracked frame: its schedule, or the leader's doubt."""
         self._since += 1
         return self._since >= self.p.every or lead.psr < self.p.doubt_psr
+
+    def confident(self, c: GoneCues) -> bool:
+        """The second's PSR of `c` is at least its typical PSR (none yet: not confident)."""
+        h = self._psr[1]
+        return bool(h) and math.log1p(max(c.psr, 0.0)) >= float(np.median(h))
 
     def look(self, image: np.ndarray, lead: SiameseDetection, lead_cues: GoneCues,
              off_path: Callable[[Box], float]) -> Opinion:
