@@ -4,7 +4,7 @@ features; the second looks on its schedule and moves with the track between its 
 is the frame's box (or, with `lead_follows`, the leader looks there and takes that answer); two boxes that
 agree blend; the look-alike guard vetoes a second box off the motion reference; with `recentre_iou` a second
 that disagrees with the standing leader is moved onto the leader's box; with `agree_resumes` two agreeing
-opinions resume a lost track when the second is sure and the size is the target's."""
+opinions resume a lost track when the second is sure, the size is the target's and the place the motion's."""
 
 from __future__ import annotations
 
@@ -172,18 +172,22 @@ def test_the_second_is_confident_at_its_typical_psr_or_above() -> None:
 def test_while_gone_two_agreeing_opinions_resume_only_at_the_targets_size() -> None:
     lead = NetworkLead.__new__(NetworkLead)  # `_agreed` reads the last box, the opinion and the second
     lead.p, lead.box = LeadParams(), Box.from_center(100.0, 100.0, 20.0, 40.0)
+    lead.missed, lead._speed = 10, 0.0  # the resume radius: 0.5 + 10 x 0.02 = 0.7 target sizes
     second = SimpleNamespace(p=SecondParams(agree_resumes=True), confident=lambda c: c.psr >= 10.0)
     lead.second = second
 
     def agreed(own: Box, other: Box, psr: float = 20.0) -> bool:
         lead.opinion = Opinion(SimpleNamespace(smoothed=other), _cues(1.0, psr), 0.1, False)
-        return lead._agreed(SimpleNamespace(smoothed=own))
+        return lead._agreed(SimpleNamespace(smoothed=own), pred, 32.0)
 
-    here = Box.from_center(130.0, 100.0, 20.0, 40.0)
+    pred = Box.from_center(120.0, 100.0, 20.0, 40.0)
+    here = Box.from_center(130.0, 100.0, 20.0, 40.0)  # 10 px = 0.31 sizes of 32 px from the prediction
     assert agreed(here, Box.from_center(131.0, 101.0, 20.0, 40.0))
     assert not agreed(here, Box.from_center(131.0, 101.0, 20.0, 40.0), psr=5.0)  # the second is unsure
     assert not agreed(here, Box.from_center(160.0, 100.0, 20.0, 40.0))  # they disagree
     big = Box.from_center(130.0, 100.0, 40.0, 80.0)
     assert not agreed(big, big)  # twice the target's side: not its size
+    there = Box.from_center(150.0, 100.0, 20.0, 40.0)  # 30 px = 0.94 sizes: beyond the motion's reach
+    assert not agreed(there, there)
     second.p = SecondParams(agree_resumes=False)
     assert not agreed(here, here)

@@ -218,7 +218,7 @@ class NetworkLead:
                 if back is not None:
                     det, c, velocity = back
                     shown += (_crop(det),)
-        if gone and self.missed > 0 and self._agreed(det):  # two opinions agree on the target: found again
+        if gone and self.missed > 0 and self._agreed(det, pred, size):  # two opinions agree: found again
             self.verdict.gone, resumed, gone = False, True, False
         if gone:  # 3. while gone: candidates must pass the resume bar where the motion allows
             found = [(det, c)] + [(d, cues(d)) for d in self._redetect(image, pred)]
@@ -284,14 +284,17 @@ class NetworkLead:
             return alt, k, (ref[2], ref[3])
         return None
 
-    def _agreed(self, det: SiameseDetection) -> bool:
+    def _agreed(self, det: SiameseDetection, pred: Box, size: float) -> bool:
         """While gone, the second opinion finds the target where the leader's own answer is: the two boxes
-        agree (`agree_iou`), the second's PSR is at least its typical one, and the leader's size is the
-        target's (`resume_size`) (`SecondParams.agree_resumes`)."""
+        agree (`agree_iou`), the second's PSR is at least its typical one, the leader's size is the
+        target's (`resume_size`) and its place one the motion allows (the resume radius around the
+        prediction) (`SecondParams.agree_resumes`)."""
         o, s = self.opinion, self.second
         if o is None or s is None or not s.p.agree_resumes or not s.confident(o.cues):
             return False
         a = det.smoothed
+        if off_path(a, pred, size) > self._radius():
+            return False
         grow = math.sqrt(a.w * a.h / max(self.box.w * self.box.h, 1e-12))
         sized = 1.0 / self.p.resume_size <= grow <= self.p.resume_size
         return a.iou(o.det.smoothed) >= s.p.agree_iou and sized
