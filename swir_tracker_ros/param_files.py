@@ -20,6 +20,7 @@ from swir_tracker_ros.nodes.param_docs import ParamsFile, markdown_table, marker
 from swir_tracker_ros.nodes.tracker_node_params import TrackerNodeParams
 from swir_tracker_ros.pelco.params import PositionerParams
 from swir_tracker_ros.policies.lead import LeadParams
+from swir_tracker_ros.policies.second import SecondParams
 from swir_tracker_ros.simulation import scene_camera_node
 from swir_tracker_ros.tracker import TrackerParams
 
@@ -37,6 +38,7 @@ def documented_tables() -> list[tuple[str, type, str]]:
             ("docs/tracker_node.md", TrackerParams, "tracker."),
             ("docs/tracker_node.md", SiameseParams, "tracker.base."),
             ("docs/tracker_node.md", LeadParams, "tracker.lead."),
+            ("docs/tracker_node.md", SecondParams, "tracker.lead.second."),
             ("docs/positioner.md", PositionerParams, "")]
 
 
