@@ -295,9 +295,13 @@ class NetworkLead:
         a = det.smoothed
         if off_path(a, pred, size) > self._radius():
             return False
-        grow = math.sqrt(a.w * a.h / max(self.box.w * self.box.h, 1e-12))
-        sized = 1.0 / self.p.resume_size <= grow <= self.p.resume_size
-        return a.iou(o.det.smoothed) >= s.p.agree_iou and sized
+        return a.iou(o.det.smoothed) >= s.p.agree_iou and self._sized(a)
+
+    def _sized(self, box: Box) -> bool:
+        """`box` has the target's size: its side (sqrt(w h)) within `resume_size` of the last accepted
+        box's, either way (a box grown onto an occluder or shrunk onto a part is not the target)."""
+        grow = math.sqrt(box.w * box.h / max(self.box.w * self.box.h, 1e-12))
+        return 1.0 / self.p.resume_size <= grow <= self.p.resume_size
 
     def _departs(self, box: Box, guard: LookalikeGuard | None) -> bool:
         """A box the look-alike guard would not let the track take: its centre lies further than the guard's
@@ -336,8 +340,7 @@ class NetworkLead:
         if c.psr < v.resume_bar() or c.score < v.p.score_gone:
             return False
         if off_path(det.smoothed, pred, size) <= self._radius():
-            grow = math.sqrt(det.box.w * det.box.h / max(self.box.w * self.box.h, 1e-12))
-            return 1.0 / self.p.resume_size <= grow <= self.p.resume_size
+            return self._sized(det.box)
         typical = math.exp(v.typical) if v.typical is not None else 0.0
         return self.missed >= self.p.long_loss and c.psr >= self.p.strong_ratio * typical
 

@@ -18,10 +18,12 @@ The judge is a logistic model of these features (`judge_features`, in that order
 + b))), the probability that the second's box is the better one; it was fitted on the development set's
 frames where the two networks' answers differ (independent runs of each network, the one whose box overlaps
 the ground truth more being the better), cross-validated over videos (benchmarks/judge_calibration.py,
-docs/experiments.md "Issue 53"). When P exceeds `margin` the second's box stands: the leader searches again
-there and takes that answer as its own (its verdict keeps judging its own cues); when the leader's box stands
-and the two disagree (IoU below `recentre_iou`), the second is moved onto the leader's box, so that neither
-follows a look-alike the other has left.
+docs/experiments.md "Issue 53"). When P exceeds `margin` (and the look-alike guard does not veto it,
+policies/lead.py) the second's box stands: it is the frame's box, and each network keeps its own state (with
+`lead_follows`, the leader searches again there and takes that answer instead); two boxes that agree
+(`agree_iou`) are blended (`blend`). Options measured and left off (docs/experiments.md): `recentre_iou`, the
+second moved onto a standing leader's box when the two disagree; `while_gone`, the second also looks while
+the target is gone; `agree_resumes`, two agreeing opinions resume a lost track.
 """
 
 from __future__ import annotations
@@ -153,7 +155,8 @@ class SecondOpinion:
         self.net.center = (cx + dx, cy + dy)
 
     def move(self, box: Box) -> None:
-        """Put its state on `box` (the track's box, when the two disagree and the leader stands)."""
+        """Put its state on `box` (the leader's box when they disagree and it stands, with `recentre_iou`; the
+        resumed box)."""
         self.net.center, self.net.size = box.center, (box.w, box.h)
 
     def due(self, lead: GoneCues) -> bool:
@@ -174,14 +177,15 @@ class SecondOpinion:
         det = self.net.search(image, *self.net.center, *self.net.size)
         c = cues(det)
         a, b = lead.smoothed, det.smoothed
+        agreement = a.iou(b)
         typical = tuple(float(np.median(h)) if h else None for h in self._psr)
-        f = judge_features(lead_cues, c, a.iou(b), off_path(a), off_path(b), typical)  # type: ignore[arg-type]
+        f = judge_features(lead_cues, c, agreement, off_path(a), off_path(b), typical)  # type: ignore[arg-type]
         for h, k in zip(self._psr, (lead_cues, c)):
             if k.psr > 0.0:
                 h.append(math.log1p(k.psr))
         prob = judge(self.p.weights, f)
         stands = prob > self.p.margin
-        if stands or a.iou(b) >= self.p.recentre_iou:
+        if stands or agreement >= self.p.recentre_iou:
             self.move(b)  # it follows its own answer
         else:
             self.move(a)  # the leader stands and they disagree: it looks where the leader is
@@ -190,7 +194,6 @@ class SecondOpinion:
     def joined(self, box: Box, opinion: Opinion) -> Box:
         """The frame's box from the leader's `box` and the second's answer (`joined`)."""
         return joined(self.p, box, opinion.det.smoothed, opinion.stands)
-
 
 
 def blend(lead: Box, second: Box, share: float) -> Box:
