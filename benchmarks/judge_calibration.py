@@ -38,6 +38,7 @@ from scipy.optimize import minimize
 
 from swir_tracker_ros.core.siamese.params import SiameseParams
 from swir_tracker_ros.core.siamese.tracker import SiameseTracker
+from swir_tracker_ros.harness import metrics
 from swir_tracker_ros.harness.devset import catalogue, data_dirs, sequence_folders, video_of
 from swir_tracker_ros.harness.sources import open_source
 from swir_tracker_ros.policies.gone import CUE_NAMES, GoneCues, cues
@@ -45,7 +46,6 @@ from swir_tracker_ros.policies.second import HISTORY, JUDGE_FEATURES, blend, jud
 from swir_tracker_ros.types import Box
 
 OUT = Path(__file__).resolve().parent.parent / "out" / "judge"
-THRESHOLDS = np.linspace(0.0, 1.0, 21)
 
 
 # --- 1. dump ------------------------------------------------------------------------------------------
@@ -95,8 +95,8 @@ def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def auc(overlaps: np.ndarray) -> float:
-    """Success AUC of the present frames' overlaps (21 thresholds)."""
-    return float(np.mean([(overlaps > t).mean() for t in THRESHOLDS])) if len(overlaps) else float("nan")
+    """Success AUC of the present frames' overlaps, as the harness scores it (harness/metrics.py)."""
+    return metrics.auc(metrics.success_curve(overlaps))
 
 
 def _cues(row: np.ndarray, names: list[str]) -> GoneCues:
